@@ -1,0 +1,95 @@
+// Fixed-point formats of the MotionCore datapath, and the saturating primitives
+// that every twin uses. This is the one place the formats live; rtl/mc_fixed.vh
+// mirrors the widths as Verilog parameters and tests/test_regs_agree.cpp checks
+// that the two agree.
+//
+// Synthesizable subset: fixed-width integers, no heap, no recursion, static loop
+// bounds. Wide intermediates use `mc::i128`, the stand-in for an HLS tool's
+// ap_int<89>; no value wider than 89 bits is ever formed.
+#pragma once
+
+#include <cstdint>
+
+namespace mc {
+
+__extension__ typedef __int128 i128;
+
+// --- Formats (see docs/numerics.md for why each width suffices) ------------
+// Positions and errors: signed 32-bit encoder counts.
+constexpr int POS_W = 32;
+// Controller output: signed 16-bit drive units (full scale +-32767 = DAC/PWM range).
+constexpr int OUT_W = 16;
+constexpr int32_t OUT_MAX = (1 << (OUT_W - 1)) - 1;
+// Accumulator: Q17.32, i.e. output units with 32 fraction bits, 50 bits signed.
+// Integrator, derivative state and every aligned product use this format.
+constexpr int ACC_W = 50;
+constexpr int ACC_FRAC = 32;
+// Coefficient word: value = mantissa * 2^(FX - shift), mantissa signed 24-bit,
+// shift 0..63, where FX is the fraction bits of the operand it multiplies.
+constexpr int COEF_M_W = 24;
+constexpr int COEF_S_W = 6;
+constexpr int COEF_S_MAX = (1 << COEF_S_W) - 1;
+// Multiplier operand: signed 32-bit. The derivative state enters it as Q17.15.
+constexpr int MUL_X_W = 32;
+constexpr int D_OPER_FRAC = 15;
+constexpr int PROD_W = COEF_M_W + MUL_X_W;  // 56: exact product
+
+constexpr int64_t smax(int w) {
+  return (int64_t(1) << (w - 1)) - 1;
+}
+constexpr int64_t smin(int w) {
+  return -(int64_t(1) << (w - 1));
+}
+
+// Saturate a wide value to a signed w-bit range (w <= 63).
+constexpr int64_t sat(i128 v, int w) {
+  return v > smax(w) ? smax(w) : (v < smin(w) ? smin(w) : int64_t(v));
+}
+constexpr int32_t sat32(i128 v) {
+  return int32_t(sat(v, 32));
+}
+constexpr int64_t sat_acc(i128 v) {
+  return sat(v, ACC_W);
+}
+
+// Sign-extend the low w bits of x.
+constexpr int64_t sext(uint64_t x, int w) {
+  const uint64_t m = uint64_t(1) << (w - 1);
+  x &= (w == 64) ? ~uint64_t(0) : ((uint64_t(1) << w) - 1);
+  return int64_t((x ^ m) - m);
+}
+
+// Coefficient word layout: [29:24] shift, [23:0] mantissa; [31:30] read as 0.
+struct Coef {
+  int32_t m;  // signed COEF_M_W bits
+  int s;      // 0..COEF_S_MAX
+};
+constexpr Coef coef_unpack(uint32_t w) {
+  return Coef{int32_t(sext(w, COEF_M_W)), int((w >> COEF_M_W) & COEF_S_MAX)};
+}
+constexpr uint32_t coef_pack(Coef c) {
+  return (uint32_t(c.s & COEF_S_MAX) << COEF_M_W) | (uint32_t(c.m) & ((uint32_t(1) << COEF_M_W) - 1));
+}
+
+// The shared multiply-and-align step: m * x aligned into the accumulator
+// format, i.e. round((m * x * 2^32) / 2^s), rounding half up, saturated.
+// The RTL forms exactly {p, 32'b0} + 2^(s-1), shifts right by s, saturates.
+constexpr int64_t mul_align(Coef c, int32_t x) {
+  const i128 p = i128(c.m) * x;        // PROD_W bits, exact
+  i128 t = p * (i128(1) << ACC_FRAC);  // {p, 32'b0}
+  if (c.s > 0) t += i128(1) << (c.s - 1);
+  return sat_acc(t >> c.s);  // arithmetic shift: floor division
+}
+
+// Accumulator (Q.32) to output units, round half up, saturated to OUT_W.
+constexpr int32_t acc_to_out(int64_t v) {
+  return int32_t(sat((i128(v) + (i128(1) << (ACC_FRAC - 1))) >> ACC_FRAC, OUT_W));
+}
+
+// Accumulator to the Q17.15 multiplier operand, round half up, saturated.
+constexpr int32_t acc_to_doper(int64_t v) {
+  constexpr int sh = ACC_FRAC - D_OPER_FRAC;
+  return sat32((i128(v) + (i128(1) << (sh - 1))) >> sh);
+}
+
+}  // namespace mc

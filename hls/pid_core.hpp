@@ -1,0 +1,203 @@
+// pid_core twin: NAXES Tustin PID position loops sharing one multiply datapath.
+//
+// How to drive it (the same as rtl/pid_core.v): write coefficients and limits
+// through write(addr, data) (addresses in hls/pid_regs.hpp), set CTRL.enable per
+// axis, then call sample(cmd, fb) once per sample period. After the call,
+// u(axis) holds the new drive output, err(axis) the processed error and
+// sat(axis) whether the output limit was active. The RTL takes G_LATENCY cycles
+// from its sample tick to the same values; the numbers are identical bit for bit.
+//
+// Realization (docs/numerics.md derives it): parallel form
+//   P(k) = kp * e(k)
+//   I(k) = I(k-1) + ki * (e(k) + e(k-1))            ki = Ki*Ts/2
+//   D(k) = alpha * D(k-1) + beta * (e(k) - e(k-1))   alpha = (2Tf-Ts)/(2Tf+Ts),
+//                                                    beta = 2Kd/(2Tf+Ts)
+//   F(k) = kf1 * (c(k)-c(k-1)) + kf2 * (c(k)-2c(k-1)+c(k-2))
+//   u(k) = sat(P + I + D + F)
+// which has exactly the transfer function of the Tustin-discretized
+// C(s) = Kp + Ki/s + Kd s/(Tf s + 1), but never subtracts nearly equal
+// coefficients, so the integral action survives at short Ts.
+//
+// Anti-windup is conditional integration against the headroom: while the
+// output is beyond its limit, the integrator may not grow past what the limit
+// leaves (limit - P - D - F) unless it already was there. With |I| bounded by
+// the output limit, the output leaves saturation on the first sample whose
+// error has the opposite sign.
+#pragma once
+
+#include <cstdint>
+
+#include "mc_fixed.hpp"
+#include "pid_regs.hpp"
+
+namespace mc {
+
+// Sweep latency in clock cycles, tick to last output: the RTL's schedule
+// (see rtl/pid_core.v). Shortest legal Ts = this value.
+constexpr int pid_axis_cycles = 14;
+constexpr int pid_latency(int naxes) {
+  return 1 + naxes * pid_axis_cycles;
+}
+
+// Per-axis parameters as stored (the coefficient RAM of the RTL).
+struct PidParams {
+  uint32_t word[pid_reg::NREGS_RAM] = {};
+};
+
+// Per-axis state carried between samples.
+struct PidState {
+  int64_t i = 0;   // integrator, Q17.32
+  int64_t d = 0;   // derivative filter state, Q17.32
+  int32_t e1 = 0;  // e(k-1)
+  int32_t c1 = 0;  // c(k-1)
+  int32_t c2 = 0;  // c(k-2)
+};
+
+struct PidOut {
+  int32_t u = 0;    // drive output, OUT_W bits
+  int32_t err = 0;  // processed error (after deadband and clamp)
+  bool sat = false;
+};
+
+// Deadband then clamp, on the saturated difference command - feedback.
+inline int32_t pid_error(int32_t cmd, int32_t fb, uint32_t dband_w, uint32_t elim_w) {
+  const int32_t e_raw = sat32(i128(cmd) - fb);
+  const int64_t db = dband_w & 0x7FFFFFFFu;
+  const int64_t el = elim_w & 0x7FFFFFFFu;
+  int64_t e = e_raw > db ? e_raw - db : (e_raw < -db ? e_raw + db : 0);
+  if (el != 0) e = e > el ? el : (e < -el ? -el : e);
+  return int32_t(e);
+}
+
+// Effective output limit in output units: 0 or out of range means full scale.
+inline int64_t pid_olim(uint32_t w) {
+  const int64_t v = w & 0xFFFF;
+  return (v == 0 || v > OUT_MAX) ? OUT_MAX : v;
+}
+
+// One sample of one axis. This is the arithmetic of the RTL schedule, step for
+// step; the order of the saturating additions matters and is the same.
+inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int32_t cmd, int32_t fb) {
+  using namespace pid_reg;
+  PidOut o;
+  const int32_t e = pid_error(cmd, fb, p.word[DBAND], p.word[ELIM]);
+  const int32_t sum_e = sat32(i128(e) + st.e1);
+  const int32_t dif_e = sat32(i128(e) - st.e1);
+  const int32_t vel = sat32(i128(cmd) - st.c1);
+  const int32_t acc = sat32(i128(cmd) - 2 * i128(st.c1) + st.c2);
+  o.err = e;
+  if (!enable) {
+    // Disabled: output 0 and the dynamic state cleared; the error and command
+    // history keep tracking so that enabling is bumpless.
+    st.i = 0;
+    st.d = 0;
+    st.e1 = e;
+    st.c2 = st.c1;
+    st.c1 = cmd;
+    return o;
+  }
+  const int64_t pterm = mul_align(coef_unpack(p.word[KP]), e);
+  const int64_t di = mul_align(coef_unpack(p.word[KI]), sum_e);
+  const int64_t da = mul_align(coef_unpack(p.word[KD_A]), acc_to_doper(st.d));
+  const int64_t db = mul_align(coef_unpack(p.word[KD_B]), dif_e);
+  const int64_t f1 = mul_align(coef_unpack(p.word[KF1]), vel);
+  const int64_t f2 = mul_align(coef_unpack(p.word[KF2]), acc);
+
+  const int64_t ulim = pid_olim(p.word[OLIM]) << ACC_FRAC;
+  const int64_t il_w = p.word[ILIM] & 0xFFFF;
+  const int64_t ibound = (il_w != 0 && (il_w << ACC_FRAC) < ulim) ? (il_w << ACC_FRAC) : ulim;
+
+  int64_t i_c = sat_acc(i128(st.i) + di);
+  i_c = i_c > ibound ? ibound : (i_c < -ibound ? -ibound : i_c);
+  const int64_t dn = sat_acc(i128(da) + db);
+  const int64_t ff = sat_acc(i128(f1) + f2);
+  const int64_t rest = sat_acc(i128(sat_acc(i128(pterm) + dn)) + ff);
+  const int64_t v = sat_acc(i128(rest) + i_c);
+
+  int64_t i_n = i_c;
+  if (v > ulim) {
+    const int64_t head = sat_acc(i128(ulim) - rest);
+    const int64_t cap = head > st.i ? head : st.i;
+    i_n = i_c < cap ? i_c : cap;
+  } else if (v < -ulim) {
+    const int64_t head = sat_acc(i128(-ulim) - rest);
+    const int64_t cap = head < st.i ? head : st.i;
+    i_n = i_c > cap ? i_c : cap;
+  }
+  const int32_t u = acc_to_out(sat_acc(i128(rest) + i_n));
+  const int32_t ul = int32_t(ulim >> ACC_FRAC);
+  o.u = u > ul ? ul : (u < -ul ? -ul : u);
+  o.sat = v > ulim || v < -ulim;
+
+  st.i = i_n;
+  st.d = dn;
+  st.e1 = e;
+  st.c2 = st.c1;
+  st.c1 = cmd;
+  return o;
+}
+
+template <int NAXES>
+class PidCore {
+  static_assert(NAXES >= 1 && NAXES <= 15, "pid_core: NAXES must be 1..15");
+
+ public:
+  static constexpr int latency = pid_latency(NAXES);
+
+  // Synchronous reset: enables and state cleared, Ts back to its minimum.
+  // The coefficient RAM keeps its contents, as block RAM does.
+  void reset() {
+    for (int a = 0; a < NAXES; ++a) {
+      st_[a] = PidState{};
+      out_[a] = PidOut{};
+      en_[a] = false;
+    }
+    ts_ = latency;
+  }
+
+  void write(uint8_t addr, uint32_t data) {
+    const int ax = addr >> 4, r = addr & 0xF;
+    if (ax == pid_reg::GLOBAL_AXIS) {
+      if (r == pid_reg::G_TS) ts_ = data < uint32_t(latency) ? uint32_t(latency) : data;
+      return;
+    }
+    if (ax >= NAXES) return;
+    if (r < pid_reg::NREGS_RAM)
+      par_[ax].word[r] = data;
+    else if (r == pid_reg::CTRL)
+      en_[ax] = data & 1;
+  }
+
+  uint32_t read(uint8_t addr) const {
+    const int ax = addr >> 4, r = addr & 0xF;
+    if (ax == pid_reg::GLOBAL_AXIS) {
+      if (r == pid_reg::G_TS) return ts_;
+      if (r == pid_reg::G_LATENCY) return latency;
+      if (r == pid_reg::G_NAXES) return NAXES;
+      return 0;
+    }
+    if (ax >= NAXES) return 0;
+    if (r < pid_reg::NREGS_RAM) return par_[ax].word[r];
+    if (r == pid_reg::CTRL) return en_[ax] ? 1u : 0u;
+    return 0;
+  }
+
+  void sample(const int32_t* cmd, const int32_t* fb) {
+    for (int a = 0; a < NAXES; ++a) out_[a] = pid_axis_update(par_[a], st_[a], en_[a], cmd[a], fb[a]);
+  }
+
+  int32_t u(int a) const { return out_[a].u; }
+  int32_t err(int a) const { return out_[a].err; }
+  bool sat(int a) const { return out_[a].sat; }
+  const PidState& state(int a) const { return st_[a]; }
+  uint32_t ts_cycles() const { return ts_; }
+
+ private:
+  PidParams par_[NAXES];
+  PidState st_[NAXES];
+  PidOut out_[NAXES];
+  bool en_[NAXES] = {};
+  uint32_t ts_ = latency;
+};
+
+}  // namespace mc

@@ -1,0 +1,15 @@
+// motionctl subcommands. Each one registers itself on the top-level CLI::App
+// with its options and a callback that runs it; main() only adds them and
+// turns errors into one line. A new command is one more add_*_command here,
+// one cmd_*.cpp, and one line in motionctl.cpp.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace mc::host::cli {
+
+void add_coeffs_command(CLI::App& app);
+
+}  // namespace mc::host::cli

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# verilator --lint-only -Wall on every rtl/ module, each as its own top.
+set -euo pipefail
+cd "$(dirname "$0")/../rtl"
+status=0
+for f in *.v; do
+  top="${f%.v}"
+  if ! verilator --lint-only -Wall -I. --top-module "$top" *.v; then
+    echo "lint failed: rtl/$f" >&2
+    status=1
+  fi
+done
+[ $status -eq 0 ] && echo "rtl lint: $(ls *.v | wc -l) modules clean"
+exit $status

@@ -1,0 +1,14 @@
+# Host library and motionctl tests (label: unit).
+
+mc_gtest(test_pid_design unit test_pid_design.cpp)
+target_link_libraries(test_pid_design PRIVATE mc_host)
+
+# Runs the built binary, as a user would: the error contract (one stderr line,
+# exit code) is part of what is tested.
+mc_gtest(test_cli_coeffs unit test_cli_coeffs.cpp)
+target_link_libraries(test_cli_coeffs PRIVATE nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_coeffs PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_cli_coeffs motionctl)
+
+mc_gtest(test_cli_units unit test_cli_units.cpp)
+target_link_libraries(test_cli_units PRIVATE mc_host)

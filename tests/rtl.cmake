@@ -1,0 +1,51 @@
+# Verilated RTL models and the C/RTL co-simulation tests.
+
+set(MC_RTL_DIR ${CMAKE_SOURCE_DIR}/rtl)
+set(MC_VERILATOR_ARGS -Wall --assert -x-assign unique -x-initial unique -O3)
+
+# mc_verilate(<lib> TOP <module> SOURCES <files...>): a static library holding
+# the Verilated model V<module>.
+function(mc_verilate lib)
+  cmake_parse_arguments(V "" "TOP" "SOURCES" ${ARGN})
+  add_library(${lib} STATIC)
+  verilate(${lib}
+    SOURCES ${V_SOURCES}
+    TOP_MODULE ${V_TOP}
+    PREFIX V${V_TOP}
+    INCLUDE_DIRS ${MC_RTL_DIR}
+    VERILATOR_ARGS ${MC_VERILATOR_ARGS})
+  # Verilator's runtime and generated code are not held to our warning flags:
+  # consumers see their headers as system headers.
+  target_compile_options(${lib} PRIVATE -w)
+  get_target_property(vdirs ${lib} INTERFACE_INCLUDE_DIRECTORIES)
+  target_include_directories(${lib} SYSTEM INTERFACE ${vdirs})
+endfunction()
+
+mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
+mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
+
+# Twin-only tests.
+mc_gtest(test_pid_twin unit test_pid_twin.cpp)
+target_link_libraries(test_pid_twin PRIVATE mc_hls)
+
+# C/RTL co-simulation: the twin is the scoreboard.
+mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
+target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core)
+mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
+target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
+
+# Widths and register addresses: the Verilog includes agree with the C++ headers.
+mc_gtest(test_regs_agree unit test_regs_agree.cpp)
+target_link_libraries(test_regs_agree PRIVATE mc_hls)
+target_compile_definitions(test_regs_agree PRIVATE MC_RTL_DIR="${MC_RTL_DIR}")
+
+# RTL lint and synthesizability (Yosys reads and maps every module).
+add_test(NAME rtl_lint COMMAND ${CMAKE_SOURCE_DIR}/scripts/lint_rtl.sh)
+set_tests_properties(rtl_lint PROPERTIES LABELS rtl)
+add_test(NAME synth_pid_core_ice40
+  COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh pid_core ${CMAKE_BINARY_DIR}/synth_check)
+set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
+
+# Fixed point against double precision (needs the host's coefficient design).
+mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
+target_link_libraries(test_pid_numerics PRIVATE mc_hls mc_host)
