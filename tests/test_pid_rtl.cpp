@@ -95,7 +95,7 @@ TEST(PidRtl, RandomBitExact) {
       next_episode = sim.samples() + uint64_t(st.range(50, 3000));
       for (int a = 0; a < kAxes; ++a) {
         cmd[a] = st.scaled();
-        fb[a] = wild ? st.scaled() : cmd[a] + st.range(-300, 300);
+        fb[a] = wild ? st.scaled() : sat32(i128(cmd[a]) + st.range(-300, 300));
       }
     }
     // Inputs move every sample: a trajectory plus noise in physical episodes.
