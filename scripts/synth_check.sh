@@ -15,8 +15,10 @@ if grep -E "^Latch inferred|conflicting drivers|^Warning:|^ERROR" "$log" >&2; th
   echo "synth_check: $top: Yosys reported the problems above" >&2
   exit 1
 fi
-lut=$(awk '/SB_LUT4/ {print $2}' "$work/$top.stat.txt" | tail -1)
-dsp=$(awk '/SB_MAC16/ {print $2}' "$work/$top.stat.txt" | tail -1)
-ebr=$(awk '/SB_RAM40_4K/ {print $2}' "$work/$top.stat.txt" | tail -1)
-echo "$top on iCE40UP5K: ${lut:-0} LUT4 of 5280, ${dsp:-0} SB_MAC16 of 8, ${ebr:-0} SB_RAM40_4K of 30"
-[ "${lut:-0}" -le 5280 ] && [ "${dsp:-0}" -le 8 ] && [ "${ebr:-0}" -le 30 ]
+cells() { awk -v c="$1" '$1 == c {n = $2} END {print n + 0}' "$work/$top.stat.txt"; }
+ff=0
+for c in SB_DFF SB_DFFE SB_DFFSR SB_DFFSS SB_DFFESR SB_DFFESS SB_DFFR SB_DFFS SB_DFFER SB_DFFES; do
+  ff=$((ff + $(cells "$c")))
+done
+echo "$top mapped to iCE40: $(cells SB_LUT4) LUT4, $ff flip-flops, $(cells SB_CARRY) carries," \
+  "$(cells SB_MAC16) SB_MAC16, $(cells SB_RAM40_4K) SB_RAM40_4K"
