@@ -14,21 +14,46 @@
 #include <sstream>
 #include <string>
 
-#include "Vpid_core.h"
-#include "Vpid_core___024root.h"
 #include "pid_core.hpp"
 #include "verilated.h"
 
 namespace mc::test {
 
-constexpr int kAxes = 3;  // Vpid_core is verilated with the default NAXES
+// Verilator gives a port of up to 32 bits as an integer, up to 64 as a 64-bit
+// integer and wider ones as a word array: access bit fields the same way on all.
+inline void put32(uint32_t& p, int, uint32_t v) {
+  p = v;
+}
+inline void put32(uint64_t& p, int i, uint32_t v) {
+  p = (p & ~(uint64_t(0xFFFFFFFFu) << (32 * i))) | (uint64_t(v) << (32 * i));
+}
+template <std::size_t N>
+void put32(VlWide<N>& p, int i, uint32_t v) {
+  p[i] = v;
+}
+template <typename P>
+uint32_t get_bits(const P& p, int lsb, int w) {
+  return uint32_t((uint64_t(p) >> lsb) & ((uint64_t(1) << w) - 1));
+}
+template <std::size_t N>
+uint32_t get_bits(const VlWide<N>& p, int lsb, int w) {
+  const uint64_t lo = p[lsb / 32], hi = (lsb / 32 + 1 < int(N)) ? p[lsb / 32 + 1] : 0;
+  return uint32_t((((hi << 32) | lo) >> (lsb % 32)) & ((uint64_t(1) << w) - 1));
+}
+template <typename A>
+int64_t get_acc(const A& arr, int i) {
+  return sext(uint64_t(arr[i]), ACC_W);
+}
 
-class PidCosim {
+// Model: a Verilated pid_core (V<prefix>); NAXES must match its parameter.
+template <typename Model, int NAXES>
+class PidCosimT {
  public:
-  explicit PidCosim(uint32_t seed) : ctx_(std::make_unique<VerilatedContext>()) {
+  static constexpr int kAxes = NAXES;
+  explicit PidCosimT(uint32_t seed) : ctx_(std::make_unique<VerilatedContext>()) {
     ctx_->randReset(2);  // random initial state flushes out missing resets
     ctx_->randSeed(int(seed & 0x7fffffff));
-    dut_ = std::make_unique<Vpid_core>(ctx_.get(), "pid_core");
+    dut_ = std::make_unique<Model>(ctx_.get(), "pid_core");
     twin_.reset();
     // Reset cycles are not scoreboarded: whatever random state the model
     // powered up in, the synchronous reset must bring it to the twin's.
@@ -41,9 +66,9 @@ class PidCosim {
     }
     dut_->rst = 0;
   }
-  ~PidCosim() { dut_->final(); }
-  PidCosim(const PidCosim&) = delete;
-  PidCosim& operator=(const PidCosim&) = delete;
+  ~PidCosimT() { dut_->final(); }
+  PidCosimT(const PidCosimT&) = delete;
+  PidCosimT& operator=(const PidCosimT&) = delete;
 
   // Values presented to the RTL on every following cycle until changed.
   void set_inputs(const std::array<int32_t, kAxes>& cmd, const std::array<int32_t, kAxes>& fb) {
@@ -106,8 +131,8 @@ class PidCosim {
       dut_->cfg_wdata = wq_.front().data;
     }
     for (int a = 0; a < kAxes; ++a) {
-      dut_->cmd_i[a] = uint32_t(cmd_[a]);
-      dut_->fb_i[a] = uint32_t(fb_[a]);
+      put32(dut_->cmd_i, a, uint32_t(cmd_[a]));
+      put32(dut_->fb_i, a, uint32_t(fb_[a]));
     }
     settle();
     // At the shortest Ts a sweep ends in the cycle the next one is ticked:
@@ -140,13 +165,13 @@ class PidCosim {
   }
 
   const PidCore<kAxes>& twin() const { return twin_; }
-  Vpid_core& dut() { return *dut_; }
+  Model& dut() { return *dut_; }
   uint64_t samples() const { return samples_; }
   uint64_t cycles() const { return cycles_; }
   uint64_t last_period() const { return last_period_; }
   uint64_t last_latency() const { return last_latency_; }
-  int32_t u(int a) const { return int16_t(uint16_t(dut_->u_o >> (16 * a))); }
-  int32_t err(int a) const { return int32_t(dut_->err_o[a]); }
+  int32_t u(int a) const { return int16_t(uint16_t(get_bits(dut_->u_o, 16 * a, 16))); }
+  int32_t err(int a) const { return int32_t(get_bits(dut_->err_o, 32 * a, 32)); }
   bool sat(int a) const { return (dut_->sat_o >> a) & 1; }
   int mismatches() const { return mismatches_; }
   static int Vlat() { return PidCore<kAxes>::latency; }
@@ -167,8 +192,8 @@ class PidCosim {
     for (int a = 0; a < kAxes; ++a) {
       // The dynamic state too: a one-LSB integrator difference can hide
       // below the output's rounding for a long time.
-      const int64_t si = sext(dut_->rootp->pid_core__DOT__st_i[a], ACC_W);
-      const int64_t sd = sext(dut_->rootp->pid_core__DOT__st_d[a], ACC_W);
+      const int64_t si = get_acc(dut_->rootp->pid_core__DOT__st_i, a);
+      const int64_t sd = get_acc(dut_->rootp->pid_core__DOT__st_d, a);
       const bool ok = u(a) == twin_.u(a) && err(a) == twin_.err(a) && sat(a) == twin_.sat(a) &&
                       si == twin_.state(a).i && sd == twin_.state(a).d;
       if (!ok && ++mismatches_ <= 5) {
@@ -188,7 +213,7 @@ class PidCosim {
     uint32_t data;
   };
   std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<Vpid_core> dut_;
+  std::unique_ptr<Model> dut_;
   PidCore<kAxes> twin_;
   std::deque<W> wq_;
   std::array<int32_t, kAxes> cmd_{}, fb_{};

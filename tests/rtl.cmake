@@ -5,15 +5,19 @@ set(MC_VERILATOR_ARGS -Wall --assert -x-assign unique -x-initial unique -O3)
 
 # mc_verilate(<lib> TOP <module> SOURCES <files...>): a static library holding
 # the Verilated model V<module>.
+# PREFIX overrides the class name, PARAMS adds -G overrides.
 function(mc_verilate lib)
-  cmake_parse_arguments(V "" "TOP" "SOURCES" ${ARGN})
+  cmake_parse_arguments(V "" "TOP;PREFIX" "SOURCES;PARAMS" ${ARGN})
+  if(NOT V_PREFIX)
+    set(V_PREFIX V${V_TOP})
+  endif()
   add_library(${lib} STATIC)
   verilate(${lib}
     SOURCES ${V_SOURCES}
     TOP_MODULE ${V_TOP}
-    PREFIX V${V_TOP}
+    PREFIX ${V_PREFIX}
     INCLUDE_DIRS ${MC_RTL_DIR}
-    VERILATOR_ARGS ${MC_VERILATOR_ARGS})
+    VERILATOR_ARGS ${MC_VERILATOR_ARGS} ${V_PARAMS})
   # Verilator's runtime and generated code are not held to our warning flags:
   # consumers see their headers as system headers.
   target_compile_options(${lib} PRIVATE -w)
@@ -22,6 +26,8 @@ function(mc_verilate lib)
 endfunction()
 
 mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
+mc_verilate(vpid_core1 TOP pid_core PREFIX Vpid_core1 PARAMS -GNAXES=1
+  SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
 
 # Twin-only tests.
@@ -30,7 +36,7 @@ target_link_libraries(test_pid_twin PRIVATE mc_hls)
 
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
-target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core)
+target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
 

@@ -6,10 +6,20 @@
 #include <cstdlib>
 #include <random>
 
+#include "Vpid_core.h"
+#include "Vpid_core1.h"
+#include "Vpid_core1___024root.h"
+#include "Vpid_core___024root.h"
 #include "pid_harness.hpp"
 
 namespace mc::test {
 namespace {
+
+// The default build (three axes) carries every test; a one-axis build checks
+// that the parameter, the one-bit axis field and the 16-word RAM hold up.
+using PidCosim = PidCosimT<Vpid_core, 3>;
+using PidCosim1 = PidCosimT<Vpid_core1, 1>;
+constexpr int kAxes = PidCosim::kAxes;
 
 using namespace mc::pid_reg;
 
@@ -70,36 +80,38 @@ class Stim {
   std::mt19937_64 rng_;
 };
 
-void configure_axis(PidCosim& sim, Stim& st, int a, bool wild) {
+template <typename Sim>
+void configure_axis(Sim& sim, Stim& st, int a, bool wild) {
   for (uint8_t r = 0; r < NREGS_RAM; ++r) sim.write(addr(uint8_t(a), r), st.reg_value(r, wild));
   sim.write(addr(uint8_t(a), CTRL), st.chance(0.9) ? 1u : 0u);
 }
 
-TEST(PidRtl, RandomBitExact) {
-  const uint64_t n = env_count("MC_PID_RTL_SAMPLES", 1000000);
+template <typename Sim>
+void random_bit_exact(uint64_t n) {
+  constexpr int kN = Sim::kAxes;
   const uint64_t seed = env_count("MC_SEED", 20261121);
-  PidCosim sim{uint32_t(seed)};
+  Sim sim{uint32_t(seed)};
   Stim st(seed);
-  std::array<int32_t, kAxes> cmd{}, fb{};
+  std::array<int32_t, kN> cmd{}, fb{};
   bool wild = false;
   uint64_t next_episode = 0;
   while (sim.samples() < n) {
     if (sim.samples() >= next_episode) {
       wild = st.chance(0.3);
-      for (int a = 0; a < kAxes; ++a) configure_axis(sim, st, a, wild);
+      for (int a = 0; a < kN; ++a) configure_axis(sim, st, a, wild);
       // Mostly the shortest Ts (fast), sometimes longer, sometimes below the
       // minimum to exercise the clamp.
       const int tsel = st.range(0, 9);
       const uint32_t ts = tsel < 7 ? uint32_t(sim.Vlat()) : (tsel < 9 ? uint32_t(st.range(1, 200)) : 0u);
       sim.write(addr(GLOBAL_AXIS, G_TS), ts);
       next_episode = sim.samples() + uint64_t(st.range(50, 3000));
-      for (int a = 0; a < kAxes; ++a) {
+      for (int a = 0; a < kN; ++a) {
         cmd[a] = st.scaled();
         fb[a] = wild ? st.scaled() : sat32(i128(cmd[a]) + st.range(-300, 300));
       }
     }
     // Inputs move every sample: a trajectory plus noise in physical episodes.
-    for (int a = 0; a < kAxes; ++a) {
+    for (int a = 0; a < kN; ++a) {
       if (wild) {
         cmd[a] = st.chance(0.3) ? st.scaled() : cmd[a];
         fb[a] = st.chance(0.3) ? st.scaled() : fb[a];
@@ -112,17 +124,25 @@ TEST(PidRtl, RandomBitExact) {
     sim.set_inputs(cmd, fb);
     // Occasional register writes and enable toggles between samples.
     if (st.chance(0.02)) {
-      const uint8_t a = uint8_t(st.range(0, kAxes - 1));
+      const uint8_t a = uint8_t(st.range(0, kN - 1));
       const uint8_t r = uint8_t(st.range(0, NREGS_RAM - 1));
       sim.write(addr(a, r), st.reg_value(r, wild));
     }
-    if (st.chance(0.005)) sim.write(addr(uint8_t(st.range(0, kAxes - 1)), CTRL), st.u32() & 1);
+    if (st.chance(0.005)) sim.write(addr(uint8_t(st.range(0, kN - 1)), CTRL), st.u32() & 1);
     if (st.chance(0.0005)) sim.read(addr(uint8_t(st.range(0, 15)), uint8_t(st.range(0, 15))));
     ASSERT_TRUE(sim.run_sample()) << "no sweep completed";
     ASSERT_EQ(sim.mismatches(), 0) << "seed " << seed;
   }
   EXPECT_EQ(sim.mismatches(), 0);
-  RecordProperty("samples", std::to_string(sim.samples()));
+  ::testing::Test::RecordProperty("samples", std::to_string(sim.samples()));
+}
+
+TEST(PidRtl, RandomBitExact) {
+  random_bit_exact<PidCosim>(env_count("MC_PID_RTL_SAMPLES", 1000000));
+}
+
+TEST(PidRtl, RandomBitExactOneAxis) {
+  random_bit_exact<PidCosim1>(env_count("MC_PID_RTL_SAMPLES", 1000000) / 4);
 }
 
 TEST(PidRtl, LatencyPeriodAndTsClamp) {
