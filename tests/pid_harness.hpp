@@ -16,30 +16,10 @@
 
 #include "pid_core.hpp"
 #include "verilated.h"
+#include "vl_ports.hpp"
 
 namespace mc::test {
 
-// Verilator gives a port of up to 32 bits as an integer, up to 64 as a 64-bit
-// integer and wider ones as a word array: access bit fields the same way on all.
-inline void put32(uint32_t& p, int, uint32_t v) {
-  p = v;
-}
-inline void put32(uint64_t& p, int i, uint32_t v) {
-  p = (p & ~(uint64_t(0xFFFFFFFFu) << (32 * i))) | (uint64_t(v) << (32 * i));
-}
-template <std::size_t N>
-void put32(VlWide<N>& p, int i, uint32_t v) {
-  p[i] = v;
-}
-template <typename P>
-uint32_t get_bits(const P& p, int lsb, int w) {
-  return uint32_t((uint64_t(p) >> lsb) & ((uint64_t(1) << w) - 1));
-}
-template <std::size_t N>
-uint32_t get_bits(const VlWide<N>& p, int lsb, int w) {
-  const uint64_t lo = p[lsb / 32], hi = (lsb / 32 + 1 < int(N)) ? p[lsb / 32 + 1] : 0;
-  return uint32_t((((hi << 32) | lo) >> (lsb % 32)) & ((uint64_t(1) << w) - 1));
-}
 template <typename A>
 int64_t get_acc(const A& arr, int i) {
   return sext(uint64_t(arr[i]), ACC_W);

@@ -33,6 +33,8 @@ mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
 # Twin-only tests.
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
 target_link_libraries(test_pid_twin PRIVATE mc_hls)
+mc_gtest(test_interp_twin unit test_interp_twin.cpp)
+target_link_libraries(test_interp_twin PRIVATE mc_hls mc_host)
 
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
