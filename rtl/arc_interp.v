@@ -63,9 +63,11 @@ module arc_interp (
 
   // S = D + mx*x + my*y is D at the corner of the cell both moves border,
   // less 1/2: outward when S < 0. DW+1 bits hold it for any loaded D.
-  wire signed [DW:0] xs = {{(DW + 1 - A) {x[A-1]}}, x};
-  wire signed [DW:0] ys = {{(DW + 1 - A) {y[A-1]}}, y};
-  wire signed [DW:0] s = {d[DW-1], d} + (mxn ? -xs : xs) + (myn ? -ys : ys);
+  // Two carry chains, the negations folded in: -v = ~v + 1.
+  wire signed [DW:0] xs = {{(DW + 1 - A) {x[A-1]}}, x} ^ {(DW + 1) {mxn}};
+  wire signed [DW:0] ys = {{(DW + 1 - A) {y[A-1]}}, y} ^ {(DW + 1) {myn}};
+  wire signed [DW:0] sx = {d[DW-1], d} + xs + {{DW{1'b0}}, mxn};
+  wire signed [DW:0] s = sx + ys + {{DW{1'b0}}, myn};
 
   wire final_q = ncross == nq;
   wire xlock = final_q && x == xe;
@@ -78,9 +80,11 @@ module arc_interp (
   // The moving coordinate, its new value, and the change of D:
   // (c + m)^2 - c^2 = 2*m*c + 1.
   wire signed [ A-1:0] c = movex_o ? x : y;
-  wire signed [ A-1:0] c_n = neg_o ? c - 1'b1 : c + 1'b1;
-  wire signed [DW-1:0] c2 = {{(DW - A - 1) {c[A-1]}}, c, 1'b0};
-  wire signed [DW-1:0] d_n = (neg_o ? d - c2 : d + c2) + 1'b1;
+  wire signed [ A-1:0] c_n = c + {{(A - 1) {neg_o}}, 1'b1};
+  // D + 2*c + 1 = D + {c, 1}; moving down, c_n = c - 1 and
+  // D - 2*c + 1 = D - 2*c_n - 1 = D + {~c_n, 1}: one chain either way.
+  wire signed [ A-1:0] c_op = neg_o ? ~c_n : c;
+  wire signed [DW-1:0] d_n = d + {{(DW - A - 1) {c_op[A-1]}}, c_op, 1'b1};
   // Leaving the quadrant: an inward move that makes the coordinate zero.
   wire ncross_n = !outward_o && ~|c_n;
 

@@ -40,6 +40,8 @@ module feed_gen (
   reg  [W-1:0] inc;  // datapath: loaded before every run, needs no reset
   reg  [W-1:0] k;
   wire [  W:0] sum = {1'b0, ph} + {1'b0, inc};
+  // inc +- k as one carry chain: inc + (k ^ ~up) + ~up.
+  wire [W-1:0] inc_adj = inc + (k ^ {W{~adj_up_i}}) + {{(W - 1) {1'b0}}, ~adj_up_i};
 
   // Phase and fire: the carry out of the accumulator is the iteration.
   always @(posedge clk) begin
@@ -62,7 +64,7 @@ module feed_gen (
       end
       if (ld_idx_i == I_K_LO) k[31:0] <= ld_data_i;
     end else if (adj_i) begin
-      inc <= adj_up_i ? inc + k : inc - k;
+      inc <= inc_adj;
     end
   end
 

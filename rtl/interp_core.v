@@ -235,14 +235,16 @@ module interp_core #(
   genvar a;
   generate
     for (a = 0; a < 3; a = a + 1) begin : g_pos
-      reg signed [31:0] p;
-      wire at_max = p == 32'sh7FFF_FFFF;
-      wire at_min = p == 32'sh8000_0000;
+      reg  signed [31:0] p;
+      wire               at_max = p == 32'sh7FFF_FFFF;
+      wire               at_min = p == 32'sh8000_0000;
+      // +-1 as one carry chain; a step into the limit is not taken.
+      wire signed [31:0] p_n = p + {{31{neg[a]}}, 1'b1};
+      wire               step = mv[a] && !(neg[a] ? at_min : at_max);
       always @(posedge clk) begin
         if (rst) p <= 32'sd0;
         else if (st == ST_IDLE && set_i) p <= set_pos_i[a*32+:32];
-        else if (mv[a] && neg[a] && !at_min) p <= p - 32'sd1;
-        else if (mv[a] && !neg[a] && !at_max) p <= p + 32'sd1;
+        else if (step) p <= p_n;
       end
       assign pos_o[a*32+:32] = p;
     end

@@ -29,6 +29,9 @@ mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR
 mc_verilate(vpid_core1 TOP pid_core PREFIX Vpid_core1 PARAMS -GNAXES=1
   SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
+set(MC_INTERP_RTL interp_core.v seg_fifo.v feed_gen.v line_interp.v arc_interp.v)
+list(TRANSFORM MC_INTERP_RTL PREPEND ${MC_RTL_DIR}/)
+mc_verilate(vinterp_core TOP interp_core SOURCES ${MC_INTERP_RTL})
 
 # Twin-only tests.
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
@@ -39,6 +42,8 @@ target_link_libraries(test_interp_twin PRIVATE mc_hls mc_host)
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
 target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1)
+mc_gtest(test_interp_rtl rtl test_interp_rtl.cpp)
+target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_host vinterp_core)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
 
@@ -53,6 +58,9 @@ set_tests_properties(rtl_lint PROPERTIES LABELS rtl)
 add_test(NAME synth_pid_core_ice40
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh pid_core ${CMAKE_BINARY_DIR}/synth_check)
 set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
+add_test(NAME synth_interp_core_ice40
+  COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh interp_core ${CMAKE_BINARY_DIR}/synth_check)
+set_tests_properties(synth_interp_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
 
 # Fixed point against double precision (needs the host's coefficient design).
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
