@@ -11,5 +11,6 @@ class App;
 namespace mc::host::cli {
 
 void add_coeffs_command(CLI::App& app);
+void add_interp_command(CLI::App& app);
 
 }  // namespace mc::host::cli

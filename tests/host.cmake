@@ -12,3 +12,8 @@ add_dependencies(test_cli_coeffs motionctl)
 
 mc_gtest(test_cli_units unit test_cli_units.cpp)
 target_link_libraries(test_cli_units PRIVATE mc_host)
+
+mc_gtest(test_cli_interp unit test_cli_interp.cpp)
+target_link_libraries(test_cli_interp PRIVATE nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_interp PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_cli_interp motionctl)

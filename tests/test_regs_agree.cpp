@@ -7,6 +7,7 @@
 #include <regex>
 #include <string>
 
+#include "interp_seg.hpp"
 #include "mc_fixed.hpp"
 #include "pid_regs.hpp"
 
@@ -58,6 +59,37 @@ TEST(RegsAgree, PidRegisterAddresses) {
                                            {"PID_G_LATENCY", G_LATENCY},
                                            {"PID_G_NAXES", G_NAXES}};
   EXPECT_EQ(v.size(), cpp.size()) << "a register was added on one side only";
+  for (const auto& [k, val] : cpp) EXPECT_EQ(v[k], val) << k;
+}
+
+TEST(RegsAgree, InterpolatorSegmentFormat) {
+  using namespace seg;
+  auto v = parse_vh("interp_seg.vh");
+  const std::map<std::string, long> cpp = {{"SEG_WORDS", SEG_WORDS},
+                                           {"SEG_PH_W", PH_W},
+                                           {"SEG_N_W", N_W},
+                                           {"SEG_ARC_W", ARC_W},
+                                           {"SEG_D_W", D_W},
+                                           {"SEG_W_HDR", W_HDR},
+                                           {"SEG_W_N", W_N},
+                                           {"SEG_W_INC_LO", W_INC_LO},
+                                           {"SEG_W_INC_HI", W_INC_HI},
+                                           {"SEG_W_A", W_A},
+                                           {"SEG_W_B", W_B},
+                                           {"SEG_W_C", W_C},
+                                           {"SEG_W_D", W_D},
+                                           {"SEG_W_E", W_E},
+                                           {"SEG_W_K_LO", W_K_LO},
+                                           {"SEG_T_LINE", T_LINE},
+                                           {"SEG_T_ARC", T_ARC},
+                                           {"SEG_T_DWELL", T_DWELL},
+                                           {"SEG_H_TYPE_LSB", H_TYPE_LSB},
+                                           {"SEG_H_LAST", H_LAST},
+                                           {"SEG_H_CCW", H_CCW},
+                                           {"SEG_H_PLANE_LSB", H_PLANE_LSB},
+                                           {"SEG_H_NQ_LSB", H_NQ_LSB},
+                                           {"SEG_H_NEG_LSB", H_NEG_LSB}};
+  EXPECT_EQ(v.size(), cpp.size()) << "a constant was added on one side only";
   for (const auto& [k, val] : cpp) EXPECT_EQ(v[k], val) << k;
 }
 

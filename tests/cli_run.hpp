@@ -1,0 +1,84 @@
+// Running the built motionctl as a user runs it, for the CLI tests: no shell
+// in between, stdout and stderr captured, and the error contract (one line
+// "motionctl: error: ...", non-zero exit) as a reusable check.
+// MOTIONCTL_PATH is defined by the test target.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace mc::test {
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+inline std::string slurp(std::FILE* f) {
+  std::string s;
+  std::rewind(f);
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
+  return s;
+}
+
+// No shell in between: arguments reach the program exactly as written here.
+// Output goes to temporary files, so a chatty child cannot fill a pipe and block.
+inline Result run(const std::vector<std::string>& args) {
+  using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+  File out(std::tmpfile(), &std::fclose), err(std::tmpfile(), &std::fclose);
+  if (!out || !err) throw std::runtime_error("tmpfile failed");
+  std::vector<std::string> storage{MOTIONCTL_PATH};
+  storage.insert(storage.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  argv.reserve(storage.size() + 1);
+  for (auto& s : storage) argv.push_back(s.data());
+  argv.push_back(nullptr);
+
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_adddup2(&fa, fileno(out.get()), 1);
+  posix_spawn_file_actions_adddup2(&fa, fileno(err.get()), 2);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("posix_spawn " + storage[0] + " failed");
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid) throw std::runtime_error("waitpid failed");
+  Result r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(out.get());
+  r.err = slurp(err.get());
+  return r;
+}
+
+inline int count_lines(const std::string& s) {
+  int n = 0;
+  for (const char c : s) n += c == '\n';
+  return n;
+}
+
+inline void expect_one_error_line(const std::vector<std::string>& args, const std::string& mentions = "") {
+  std::string cmd;
+  for (const auto& a : args) cmd += " " + a;
+  const Result r = run(args);
+  EXPECT_NE(r.exit_code, 0) << cmd;
+  EXPECT_EQ(r.out, "") << cmd;
+  EXPECT_EQ(count_lines(r.err), 1) << cmd << "\n" << r.err;
+  EXPECT_EQ(r.err.rfind("motionctl: error: ", 0), 0u) << cmd << "\n" << r.err;
+  if (!mentions.empty()) {
+    EXPECT_NE(r.err.find(mentions), std::string::npos) << cmd << "\n" << r.err;
+  }
+}
+
+}  // namespace mc::test
