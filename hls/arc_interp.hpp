@@ -91,7 +91,7 @@ class ArcInterp {
     const ArcStep st = step();
     int32_t& c = st.movex ? x_ : y_;
     // (c + m)^2 - c^2 = 2*m*c + 1
-    d_ = int32_t(sext(uint64_t(int64_t(d_) + 2 * st.dir * int64_t(c) + 1), seg::D_W));
+    d_ = int32_t(sext(uint64_t(int64_t(d_) + int64_t(2 * st.dir) * c + 1), seg::D_W));
     c = int32_t(sext(uint64_t(int64_t(c) + st.dir), seg::ARC_W));
     if (st.cross) cross_ = (cross_ + 1) & 7;
   }
