@@ -51,6 +51,9 @@ set_tests_properties(rtl_lint PROPERTIES LABELS rtl)
 add_test(NAME synth_pid_core_ice40
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh pid_core ${CMAKE_BINARY_DIR}/synth_check)
 set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
+add_test(NAME synth_quad_decoder_ice40
+  COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh quad_decoder ${CMAKE_BINARY_DIR}/synth_check)
+set_tests_properties(synth_quad_decoder_ice40 PROPERTIES LABELS synth TIMEOUT 600)
 
 # Fixed point against double precision (needs the host's coefficient design).
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
