@@ -29,16 +29,26 @@ mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR
 mc_verilate(vpid_core1 TOP pid_core PREFIX Vpid_core1 PARAMS -GNAXES=1
   SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
+mc_verilate(vquad_decoder TOP quad_decoder SOURCES ${MC_RTL_DIR}/quad_decoder.v)
+# Small widths, so that every counter saturates in a short test: the same
+# values as mc::test::QuadSmall (tests/quad_harness.hpp).
+mc_verilate(vquad_decoder_small TOP quad_decoder PREFIX Vquad_decoder_small
+  PARAMS -GFILT_W=5 -GERR_W=2 -GVEL_W=4 -GAGE_W=4
+  SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 
 # Twin-only tests.
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
 target_link_libraries(test_pid_twin PRIVATE mc_hls)
+mc_gtest(test_quad_decoder_twin unit test_quad_decoder_twin.cpp)
+target_link_libraries(test_quad_decoder_twin PRIVATE mc_hls)
 
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
 target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
+mc_gtest(test_quad_decoder_rtl rtl test_quad_decoder_rtl.cpp)
+target_link_libraries(test_quad_decoder_rtl PRIVATE mc_hls vquad_decoder vquad_decoder_small)
 
 # Widths and register addresses: the Verilog includes agree with the C++ headers.
 mc_gtest(test_regs_agree unit test_regs_agree.cpp)
