@@ -49,6 +49,9 @@ mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
 mc_gtest(test_quad_decoder_rtl rtl test_quad_decoder_rtl.cpp)
 target_link_libraries(test_quad_decoder_rtl PRIVATE mc_hls vquad_decoder vquad_decoder_small)
+# The max-count-rate table of docs/encoder.md, and its assertions.
+mc_gtest(test_quad_rate_rtl rtl test_quad_rate_rtl.cpp)
+target_link_libraries(test_quad_rate_rtl PRIVATE mc_hls vquad_decoder)
 
 # Widths and register addresses: the Verilog includes agree with the C++ headers.
 mc_gtest(test_regs_agree unit test_regs_agree.cpp)
