@@ -32,12 +32,20 @@ mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
 set(MC_INTERP_RTL interp_core.v seg_fifo.v feed_gen.v line_interp.v arc_interp.v)
 list(TRANSFORM MC_INTERP_RTL PREPEND ${MC_RTL_DIR}/)
 mc_verilate(vinterp_core TOP interp_core SOURCES ${MC_INTERP_RTL})
+mc_verilate(vquad_decoder TOP quad_decoder SOURCES ${MC_RTL_DIR}/quad_decoder.v)
+# Small widths, so that every counter saturates in a short test: the same
+# values as mc::test::QuadSmall (tests/quad_harness.hpp).
+mc_verilate(vquad_decoder_small TOP quad_decoder PREFIX Vquad_decoder_small
+  PARAMS -GFILT_W=5 -GERR_W=2 -GVEL_W=4 -GAGE_W=4
+  SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 
 # Twin-only tests.
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
 target_link_libraries(test_pid_twin PRIVATE mc_hls)
 mc_gtest(test_interp_twin unit test_interp_twin.cpp)
 target_link_libraries(test_interp_twin PRIVATE mc_hls mc_host)
+mc_gtest(test_quad_decoder_twin unit test_quad_decoder_twin.cpp)
+target_link_libraries(test_quad_decoder_twin PRIVATE mc_hls)
 
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
@@ -46,6 +54,11 @@ mc_gtest(test_interp_rtl rtl test_interp_rtl.cpp)
 target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_host vinterp_core)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
+mc_gtest(test_quad_decoder_rtl rtl test_quad_decoder_rtl.cpp)
+target_link_libraries(test_quad_decoder_rtl PRIVATE mc_hls vquad_decoder vquad_decoder_small)
+# The max-count-rate table of docs/encoder.md, and its assertions.
+mc_gtest(test_quad_rate_rtl rtl test_quad_rate_rtl.cpp)
+target_link_libraries(test_quad_rate_rtl PRIVATE mc_hls vquad_decoder)
 
 # Widths and register addresses: the Verilog includes agree with the C++ headers.
 mc_gtest(test_regs_agree unit test_regs_agree.cpp)
@@ -61,6 +74,9 @@ set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
 add_test(NAME synth_interp_core_ice40
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh interp_core ${CMAKE_BINARY_DIR}/synth_check)
 set_tests_properties(synth_interp_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
+add_test(NAME synth_quad_decoder_ice40
+  COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh quad_decoder ${CMAKE_BINARY_DIR}/synth_check)
+set_tests_properties(synth_quad_decoder_ice40 PROPERTIES LABELS synth TIMEOUT 600)
 
 # Fixed point against double precision (needs the host's coefficient design).
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)

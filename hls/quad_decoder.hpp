@@ -1,0 +1,220 @@
+// quad_decoder twin: one quadrature encoder (A, B, index Z) to a 32-bit
+// position, with glitch filters, error detection, an index latch and a
+// velocity figure. Cycle for cycle the RTL (rtl/quad_decoder.v): step() is one
+// clock edge, its registers carry the RTL's names and are updated in the
+// RTL's order, and the outputs after each step equal the RTL's bit for bit.
+// rtl/quad_decoder.v documents how to drive it; docs/encoder.md is the guide.
+//
+// Synthesizable subset: fixed-width integers, no heap, static loop bounds.
+// Template parameters are the RTL's parameters (widths in bits).
+#pragma once
+
+#include <cstdint>
+
+#include "mc_fixed.hpp"
+
+namespace mc {
+
+// Inputs of one clock: the RTL's ports without clk and the _i suffix.
+struct QuadIn {
+  bool rst = false;
+  // configuration
+  uint32_t filt_len = 0;  // clocks; only the low FILT_W bits reach the RTL
+  bool dir_inv = false;
+  bool idx_clr_en = false;
+  // control strobes
+  bool pos_load = false;
+  int32_t pos_load_val = 0;
+  bool idx_arm = false;
+  bool idx_disarm = false;
+  bool err_clr = false;
+  bool sample = false;
+  // encoder pins
+  bool a = false;
+  bool b = false;
+  bool z = false;
+};
+
+// Outputs after a clock edge: the RTL's output ports without the _o suffix.
+struct QuadOut {
+  int32_t pos = 0;
+  int32_t idx_pos = 0;
+  bool idx_armed = false;
+  bool idx_seen = false;
+  bool err = false;
+  uint32_t err_cnt = 0;
+  int32_t vel = 0;  // sign-extended from VEL_W bits
+  uint32_t age = 0;
+  bool a = false;
+  bool b = false;
+  bool z = false;
+  bool operator==(const QuadOut& o) const {
+    return pos == o.pos && idx_pos == o.idx_pos && idx_armed == o.idx_armed && idx_seen == o.idx_seen &&
+           err == o.err && err_cnt == o.err_cnt && vel == o.vel && age == o.age && a == o.a && b == o.b &&
+           z == o.z;
+  }
+  bool operator!=(const QuadOut& o) const { return !(*this == o); }
+};
+
+// All ones in the low w bits (w <= 32).
+constexpr uint32_t ones(int w) {
+  return uint32_t((uint64_t(1) << w) - 1);
+}
+
+template <int FILT_W = 8, int ERR_W = 16, int VEL_W = 32, int AGE_W = 16>
+class QuadDecoder {
+  static_assert(FILT_W >= 1 && FILT_W <= 16, "quad_decoder: FILT_W must be 1..16");
+  static_assert(ERR_W >= 2 && ERR_W <= 32, "quad_decoder: ERR_W must be 2..32");
+  static_assert(VEL_W >= 2 && VEL_W <= 32, "quad_decoder: VEL_W must be 2..32");
+  static_assert(AGE_W >= 2 && AGE_W <= 32, "quad_decoder: AGE_W must be 2..32");
+
+ public:
+  static constexpr int filt_w = FILT_W, err_w = ERR_W, vel_w = VEL_W, age_w = AGE_W;
+
+  // The RTL's registers power up at random; its synchronous reset (held 3
+  // clocks or more) brings every one to a value that depends only on the
+  // pins. This puts the twin in the state of a reset with all pins low.
+  QuadDecoder() = default;
+
+  // One rising clock edge with these inputs. Channels: bit 0 = A, 1 = B, 2 = Z.
+  QuadOut step(const QuadIn& in) {
+    Regs n = r_;  // nonblocking: every right-hand side reads r_
+    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t len = in.filt_len & ones(FILT_W);
+
+    // Synchronizers.
+    n.meta = pins;
+    n.sync = r_.meta;
+
+    // Glitch filters.
+    const uint32_t differ = r_.sync ^ r_.filt;
+    uint32_t pass = 0, drop = 0;
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t seen = r_.cnt[c] + 1;
+      const bool d = (differ >> c) & 1;
+      if (d && seen >= len) pass |= 1u << c;
+      if (c < 2 && !d && r_.cnt[c] != 0) drop |= 1u << c;
+    }
+    for (int c = 0; c < 3; ++c) {
+      const bool d = (differ >> c) & 1, p = (pass >> c) & 1;
+      n.cnt[c] = (in.rst || !d || p) ? 0 : (r_.cnt[c] + 1) & ones(FILT_W);
+    }
+    n.filt = in.rst ? r_.sync : r_.filt ^ pass;
+
+    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
+    for (int c = 0; c < 2; ++c) {
+      const bool d = (differ >> c) & 1, p = (pass >> c) & 1;
+      if (in.rst || !d || p) n.oth = (n.oth & ~(1u << c)) | (sync_other & (1u << c));
+    }
+    const bool straddle = (drop & (sync_other ^ r_.oth)) != 0;
+
+    // 4x decode.
+    const bool a_mv = pass & 1, b_mv = (pass >> 1) & 1;
+    const bool step = a_mv != b_mv;
+    const bool illegal = a_mv && b_mv;
+    const bool fwd = a_mv ? (((r_.sync ^ (r_.filt >> 1)) & 1) != 0) : (((r_.sync >> 1) ^ r_.filt) & 1) == 0;
+    const bool up = fwd != in.dir_inv;
+    const bool qerr = illegal || straddle;
+
+    const bool dn = step && !up;
+    const uint32_t pos_cnt = r_.pos_o + (dn ? ~0u : uint32_t(step));
+    const bool z_rise = ((pass >> 2) & 1) && ((r_.sync >> 2) & 1);
+    const bool idx_hit = r_.idx_armed_o && z_rise;
+
+    // Reset, then load, then the index clear, then counting.
+    n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
+
+    if (in.rst)
+      n.idx_pos_o = 0;
+    else if (idx_hit)
+      n.idx_pos_o = pos_cnt;
+
+    if (in.rst) {
+      n.idx_armed_o = false;
+      n.idx_seen_o = false;
+    } else {
+      if (in.idx_disarm || idx_hit)
+        n.idx_armed_o = false;
+      else if (in.idx_arm)
+        n.idx_armed_o = true;
+      if (idx_hit)
+        n.idx_seen_o = true;
+      else if (in.idx_arm)
+        n.idx_seen_o = false;
+    }
+
+    if (in.rst) {
+      n.err_o = false;
+      n.err_cnt_o = 0;
+    } else {
+      n.err_o = (r_.err_o && !in.err_clr) || qerr;
+      if (in.err_clr)
+        n.err_cnt_o = qerr ? 1 : 0;
+      else
+        n.err_cnt_o = r_.err_cnt_o + ((qerr && r_.err_cnt_o != ones(ERR_W)) ? 1 : 0);
+    }
+
+    // Per sample: the accumulator saturates (holds) at the VEL_W extremes.
+    const int32_t vel_d = dn ? -1 : int32_t(step);
+    const int64_t vel_sum = int64_t(r_.vel_acc) + vel_d;
+    const bool vel_ovf = sat(vel_sum, VEL_W) != vel_sum;
+    if (in.rst) {
+      n.vel_acc = 0;
+      n.vel_o = 0;
+    } else if (in.sample) {
+      n.vel_acc = vel_d;
+      n.vel_o = r_.vel_acc;
+    } else if (!vel_ovf) {
+      n.vel_acc = int32_t(vel_sum);
+    }
+
+    if (in.rst) {
+      n.age = ones(AGE_W);
+      n.age_o = ones(AGE_W);
+    } else {
+      n.age = step ? 0 : r_.age + (r_.age != ones(AGE_W) ? 1 : 0);
+      if (in.sample) n.age_o = r_.age;
+    }
+
+    r_ = n;
+    return out();
+  }
+
+  QuadOut out() const {
+    QuadOut o;
+    o.pos = int32_t(r_.pos_o);
+    o.idx_pos = int32_t(r_.idx_pos_o);
+    o.idx_armed = r_.idx_armed_o;
+    o.idx_seen = r_.idx_seen_o;
+    o.err = r_.err_o;
+    o.err_cnt = r_.err_cnt_o;
+    o.vel = r_.vel_o;
+    o.age = r_.age_o;
+    o.a = r_.filt & 1;
+    o.b = (r_.filt >> 1) & 1;
+    o.z = (r_.filt >> 2) & 1;
+    return o;
+  }
+
+ private:
+  // The RTL's registers, same names, in the RTL's order.
+  struct Regs {
+    uint32_t meta = 0, sync = 0;  // 3 bits each
+    uint32_t cnt[3] = {};         // FILT_W bits each
+    uint32_t filt = 0;            // 3 bits
+    uint32_t oth = 0;             // 2 bits
+    uint32_t pos_o = 0;
+    uint32_t idx_pos_o = 0;
+    bool idx_armed_o = false;
+    bool idx_seen_o = false;
+    bool err_o = false;
+    uint32_t err_cnt_o = 0;      // ERR_W bits
+    int32_t vel_acc = 0;         // VEL_W bits, signed
+    int32_t vel_o = 0;           // VEL_W bits, signed
+    uint32_t age = ones(AGE_W);  // AGE_W bits
+    uint32_t age_o = ones(AGE_W);
+  };
+  Regs r_;
+};
+
+}  // namespace mc

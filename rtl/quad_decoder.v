@@ -1,0 +1,247 @@
+// quad_decoder: one quadrature encoder (A, B, index Z) to a 32-bit position,
+// with glitch filters, error detection, an index latch and a velocity figure.
+// Twin: hls/quad_decoder.hpp (cycle for cycle; the testbench compares every
+// output every clock). User guide: docs/encoder.md.
+//
+// How to drive it:
+// - Wire the encoder straight to enc_a_i/enc_b_i/enc_z_i: they may change at
+//   any time; each goes through two synchronizer flops here. During rst the
+//   filters adopt the pins' present levels, so leaving reset counts nothing
+//   (right after power-up hold it 3 clocks, for the synchronizers to fill).
+// - filt_len_i (clocks) sets the glitch filter of all three inputs: a new
+//   level passes once the synchronized input has shown it on filt_len_i
+//   consecutive clocks; 0 and 1 both mean one clock (no filtering beyond the
+//   synchronizer). A pin change reaches pos_o and a_o/b_o/z_o
+//   max(filt_len_i, 1) + 1 clock edges after the edge that first samples it.
+// - pos_o counts every A and B edge (4x), up when A leads B (dir_inv_i
+//   reverses that), and wraps modulo 2^32: take differences in 32-bit
+//   arithmetic. Strobe pos_load_i to set it to pos_load_val_i (0 to clear);
+//   an edge counted in that clock is dropped from pos_o, not from vel_o.
+// - Index, LinuxCNC index-enable style: strobe idx_arm_i; idx_armed_o stays
+//   high until the next rising edge of the filtered Z, which latches the
+//   position (this clock's edge included) into idx_pos_o, sets idx_seen_o and
+//   drops idx_armed_o. With idx_clr_en_i high, that same position becomes 0.
+//   idx_disarm_i cancels an armed latch; arming clears idx_seen_o.
+// - err_o (sticky) and err_cnt_o (saturating) report quadrature errors: the
+//   filtered A and B changed in the same clock (not counted), or a filter
+//   discarded a pulse on one channel during which the other channel moved
+//   (edges closer than the filter lets through). Either means pos_o may be
+//   off. err_clr_i clears both; an error in that very clock still counts.
+// - Strobe sample_i once per sample period (the PID tick) and read pos_o in
+//   that clock. At its end vel_o becomes the edges counted since the previous
+//   strobe, i.e. the difference of the two pos_o samples when nothing was
+//   loaded (signed, saturating), and age_o the clocks pos_o had held its
+//   count at the strobe (saturating): with it, software can time the last
+//   edge and estimate low speeds better than one count per sample.
+`default_nettype none
+
+module quad_decoder #(
+    parameter integer FILT_W = 8,   // filter length input width, bits (clocks up to 2^FILT_W-1)
+    parameter integer ERR_W  = 16,  // error counter width, bits (saturates)
+    parameter integer VEL_W  = 32,  // velocity width, bits (counts per sample, saturates)
+    parameter integer AGE_W  = 16   // edge age width, bits (clocks, saturates)
+) (
+    // clock and reset
+    input  wire              clk,
+    input  wire              rst,
+    // configuration (levels, may change at any time)
+    input  wire [FILT_W-1:0] filt_len_i,      // glitch filter length, clocks
+    input  wire              dir_inv_i,       // count down when A leads B
+    input  wire              idx_clr_en_i,    // the index edge also zeroes pos_o
+    // control strobes (one clock each)
+    input  wire              pos_load_i,
+    input  wire [      31:0] pos_load_val_i,  // signed counts
+    input  wire              idx_arm_i,
+    input  wire              idx_disarm_i,
+    input  wire              err_clr_i,
+    input  wire              sample_i,
+    // encoder pins (asynchronous)
+    input  wire              enc_a_i,
+    input  wire              enc_b_i,
+    input  wire              enc_z_i,
+    // position and index
+    output reg  [      31:0] pos_o,           // signed counts, wraps
+    output reg  [      31:0] idx_pos_o,       // signed counts
+    output reg               idx_armed_o,
+    output reg               idx_seen_o,
+    // errors
+    output reg               err_o,
+    output reg  [ ERR_W-1:0] err_cnt_o,
+    // per sample
+    output reg  [ VEL_W-1:0] vel_o,           // signed counts per sample
+    output reg  [ AGE_W-1:0] age_o,           // clocks
+    // filtered pin levels
+    output wire              a_o,
+    output wire              b_o,
+    output wire              z_o
+);
+
+  initial begin
+    if (FILT_W < 1 || FILT_W > 16) $error("quad_decoder: FILT_W must be 1..16");
+    if (ERR_W < 2 || ERR_W > 32) $error("quad_decoder: ERR_W must be 2..32");
+    if (VEL_W < 2 || VEL_W > 32) $error("quad_decoder: VEL_W must be 2..32");
+    if (AGE_W < 2 || AGE_W > 32) $error("quad_decoder: AGE_W must be 2..32");
+  end
+
+  // Channels everywhere below: bit 0 = A, 1 = B, 2 = Z.
+  integer c;
+  genvar g;
+
+  // ---------------------------------------------------------------------
+  // Synchronizers. No reset: they hold nothing but pin samples.
+  reg [2:0] meta, sync;
+  always @(posedge clk) begin
+    meta <= {enc_z_i, enc_b_i, enc_a_i};
+    sync <= meta;
+  end
+
+  // ---------------------------------------------------------------------
+  // Glitch filters. cnt counts the clocks the synchronized level has
+  // differed from the filtered one, minus one; any clock where they agree
+  // restarts it, so only an unbroken run of filt_len_i clocks passes.
+  reg  [3*FILT_W-1:0] cnt;
+  reg  [         2:0] filt;
+  wire [         2:0] differ = sync ^ filt;
+  wire [         2:0] pass;  // the filtered level takes the new one at this edge
+  wire [         1:0] drop;  // A, B: a pending change was discarded (a glitch)
+  generate
+    for (g = 0; g < 3; g = g + 1) begin : g_filt
+      wire [FILT_W-1:0] n = cnt[g*FILT_W+:FILT_W];
+      wire [  FILT_W:0] seen = {1'b0, n} + 1'b1;  // this clock included
+      assign pass[g] = differ[g] & (seen >= {1'b0, filt_len_i});
+      if (g < 2) begin : g_drop
+        assign drop[g] = ~differ[g] & (n != {FILT_W{1'b0}});
+      end
+    end
+  endgenerate
+
+  always @(posedge clk) begin
+    for (c = 0; c < 3; c = c + 1) begin
+      if (rst || !differ[c] || pass[c]) cnt[c*FILT_W+:FILT_W] <= {FILT_W{1'b0}};
+      else cnt[c*FILT_W+:FILT_W] <= cnt[c*FILT_W+:FILT_W] + 1'b1;
+    end
+  end
+
+  // Reset adopts the present levels, so nothing counts when it ends.
+  always @(posedge clk) begin
+    if (rst) filt <= sync;
+    else filt <= filt ^ pass;
+  end
+
+  assign a_o = filt[0];
+  assign b_o = filt[1];
+  assign z_o = filt[2];
+
+  // A discarded pulse on A is noise only if B ended where it started (and
+  // vice versa): if B moved an odd number of times meanwhile, the pins went
+  // through a sequence that real motion faster than the filter also makes,
+  // and the count cannot be trusted. oth holds the other channel's level
+  // from the clock before this channel's pending change began.
+  reg  [1:0] oth;
+  wire [1:0] sync_other = {sync[0], sync[1]};
+  always @(posedge clk) begin
+    for (c = 0; c < 2; c = c + 1) begin
+      if (rst || !differ[c] || pass[c]) oth[c] <= sync_other[c];
+    end
+  end
+  wire straddle = |(drop[1:0] & (sync_other ^ oth));
+
+  // ---------------------------------------------------------------------
+  // 4x decode from the filter's pass events, so no further register stage.
+  // Forward (A leads B) runs AB = 00, 10, 11, 01: an A edge goes forward
+  // when A's new level differs from B, a B edge when B's new level equals A.
+  wire a_mv = pass[0];
+  wire b_mv = pass[1];
+  wire step = a_mv ^ b_mv;
+  wire illegal = a_mv & b_mv;
+  wire fwd = a_mv ? (sync[0] ^ filt[1]) : ~(sync[1] ^ filt[0]);
+  wire up = fwd ^ dir_inv_i;
+  wire qerr = illegal | straddle;
+
+  // One adder for both directions: +1, -1 (all ones) or 0.
+  wire        dn = step & ~up;
+  wire [31:0] pos_cnt = pos_o + {{31{dn}}, step};
+  wire        z_rise = pass[2] & sync[2];
+  wire        idx_hit = idx_armed_o & z_rise;
+
+  // Load beats the index clear, which beats counting: software's explicit
+  // value is the one it expects to read back.
+  always @(posedge clk) begin
+    if (rst) pos_o <= 32'd0;
+    else if (pos_load_i) pos_o <= pos_load_val_i;
+    else if (idx_hit && idx_clr_en_i) pos_o <= 32'd0;
+    else pos_o <= pos_cnt;
+  end
+
+  // The latched position is the one that becomes 0 with idx_clr_en_i, so
+  // idx_pos_o is exactly the offset between the old and the new count.
+  always @(posedge clk) begin
+    if (rst) idx_pos_o <= 32'd0;
+    else if (idx_hit) idx_pos_o <= pos_cnt;
+  end
+
+  // An index edge uses the arm it finds: arming in the same clock neither
+  // helps nor hurts, and a disarm arrives too late to stop it.
+  always @(posedge clk) begin
+    if (rst) begin
+      idx_armed_o <= 1'b0;
+      idx_seen_o  <= 1'b0;
+    end else begin
+      if (idx_disarm_i || idx_hit) idx_armed_o <= 1'b0;
+      else if (idx_arm_i) idx_armed_o <= 1'b1;
+      if (idx_hit) idx_seen_o <= 1'b1;
+      else if (idx_arm_i) idx_seen_o <= 1'b0;
+    end
+  end
+
+  // A clear never hides an error that happens in the same clock.
+  always @(posedge clk) begin
+    if (rst) begin
+      err_o     <= 1'b0;
+      err_cnt_o <= {ERR_W{1'b0}};
+    end else begin
+      err_o <= (err_o & ~err_clr_i) | qerr;
+      if (err_clr_i) err_cnt_o <= {{(ERR_W - 1) {1'b0}}, qerr};
+      else err_cnt_o <= err_cnt_o + {{(ERR_W - 1) {1'b0}}, qerr & ~&err_cnt_o};
+    end
+  end
+
+  // ---------------------------------------------------------------------
+  // Per sample. vel_acc counts apart from pos_o so that loads and index
+  // clears do not show up as motion. The strobe's own clock belongs to the
+  // next period: pos_o as sampled in that clock (the PID's feedback) does not
+  // include it yet, so vel_o is exactly the difference of two such samples.
+  // A step can only overflow away from zero: the sign bits tell, and the
+  // accumulator then holds.
+  reg  [VEL_W-1:0] vel_acc;
+  wire [VEL_W-1:0] vel_d = {{(VEL_W - 1) {dn}}, step};
+  wire [VEL_W-1:0] vel_sum = vel_acc + vel_d;
+  wire             vel_ovf = step & (vel_acc[VEL_W-1] == dn) & (vel_sum[VEL_W-1] != dn);
+  always @(posedge clk) begin
+    if (rst) begin
+      vel_acc <= {VEL_W{1'b0}};
+      vel_o   <= {VEL_W{1'b0}};
+    end else if (sample_i) begin
+      vel_acc <= vel_d;
+      vel_o   <= vel_acc;
+    end else if (!vel_ovf) begin
+      vel_acc <= vel_sum;
+    end
+  end
+
+  // age: clocks pos_o has held its value (in counting; loads aside). It
+  // starts saturated: after reset no edge has been seen.
+  reg [AGE_W-1:0] age;
+  always @(posedge clk) begin
+    if (rst) begin
+      age   <= {AGE_W{1'b1}};
+      age_o <= {AGE_W{1'b1}};
+    end else begin
+      age <= step ? {AGE_W{1'b0}} : age + {{(AGE_W - 1) {1'b0}}, ~&age};
+      if (sample_i) age_o <= age;
+    end
+  end
+
+endmodule
+
+`default_nettype wire
