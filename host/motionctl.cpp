@@ -48,7 +48,7 @@ int fail(const std::string& msg, int code) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"MotionCore host tool: design and load controller coefficients for the FPGA motion core.",
+  CLI::App app{"MotionCore host tool: design controller coefficients and preview interpolated paths for the FPGA motion core.",
                "motionctl"};
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
