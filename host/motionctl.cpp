@@ -48,8 +48,10 @@ int fail(const std::string& msg, int code) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"MotionCore host tool: design controller coefficients and preview interpolated paths for the FPGA motion core.",
-               "motionctl"};
+  CLI::App app{
+      "MotionCore host tool: design controller coefficients and preview interpolated paths for the FPGA "
+      "motion core.",
+      "motionctl"};
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
   app.require_subcommand(0, 1);
