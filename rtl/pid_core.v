@@ -21,41 +21,42 @@
 // - the front ALU (FW bits, saturating to 32) forms the error, deadband and
 //   clamp, and the multiplier operands c-2c1+c2, c-c1, e-e1, e, e+e1;
 // - mul_align multiplies an operand by a coefficient word, one product per
-//   cycle, three cycles after its operand;
+//   cycle;
 // - the back ALU (ACC_W bits, saturating) adds the products as they arrive
 //   and does the integrator limit, output limit and anti-windup as
 //   compare-and-select steps.
 // Per-axis state and intermediates live in block RAM: the front RAM holds the
 // command and error history (rings indexed by the sample count, so nothing
 // is ever copied) and copies of DBAND/ELIM, the back RAM the integrator and
-// derivative state and three intermediates. Limit words reach the back ALU
+// derivative state and two intermediates. Limit words reach the back ALU
 // as products too: mantissa = the limit, x = +-2^LIM_S, shift LIM_S.
 //
 // Schedule. Each axis owns a slot of AXIS_CYCLES cycles for its front end;
-// its back end runs from cycle 12 of that slot to cycle 12 of the next, over
-// the front end of the following axis. A sweep is NAXES + 1 slots cut short:
-// LATENCY = NAXES * AXIS_CYCLES + FILL_CYCLES. Per slot cycle (x = a product
-// issued in that cycle, consumed three cycles later; "next" = the back end of
-// the previous axis):
-//  cy  front ALU (axis a)          back ALU                      x
-//   0  acc <- cmd                  next: rest = pd + ff          -IL next
-//   1  acc <- sat32(acc - fb)      next: ic = I(k-1) + di         +UL next
-//   2  deadband: e - db if >= 0    next: ic min IL                -UL next
-//   3  deadband: e + db if < 0     next: ic max -IL
-//   4  clamp: min el               next: ic min UL                +UL next
-//   5  clamp: test e < -el         next: ic max -UL               -UL next
-//   6  clamp: -el                  next: v = rest + ic
-//   7  acc <- cmd (e to RAM, err)  next: v min UL -> over
-//   8  acc -= c1                   next: v max -UL -> under
-//   9  acc -= c1                   next: head = +-UL - rest; u, sat out
-//  10  x = sat32(acc + c2) acc     next: cap = max/min(head, I(k-1))  KF2*acc
-//  11  x = sat32(acc + c1) vel     next: I(k) = min/max(cap, ic)      KF1*vel
-//  12  acc <- e                    x = doper(D(k-1))                KD_A*doper
-//  13  x = sat32(e - e1)           acc <- f2                        KD_B*dif
-//  14  x = e                       acc += f1 -> ff                  KP*e
-//  15                              acc <- da
-//  16  x = sat32(e + e1)           acc += db -> D(k)                KI*sum
-//  17                              acc += p -> pd                   +IL
+// its back end runs mostly in the next slot, over the front end of the
+// following axis. A sweep is NAXES + 1 slots cut short:
+// LATENCY = NAXES * AXIS_CYCLES + FILL_CYCLES. The product of an operand an
+// ALU makes in cycle c is issued to mul_align in c+1 and added in c+4. Per
+// slot cycle (a = this slot's axis, p = the previous one):
+//  cy  front ALU (a)               back ALU                      issued
+//   0  acc <- cmd                  p: pd = dn + p                +IL p
+//   1  acc <- sat32(acc - fb)      p: rest = pd + ff             -IL p
+//   2  deadband: e - db if >= 0    p: ic = I(k-1) + di           +UL p
+//   3  deadband: e + db if < 0     p: ic min IL                  -UL p
+//   4  clamp: el if e > el         p: ic max -IL
+//   5  clamp: is e < -el?          p: ic min UL                  +UL p
+//   6  clamp: -el                  p: ic max -UL                 -UL p
+//   7  acc <- cmd (e to RAM, err)  p: v = rest + ic
+//   8  acc -= c1                   p: v min UL -> over
+//   9  acc -= c1                   p: v max -UL -> under
+//  10  x: sat32(acc + c2) (acc)    p: head = +-UL - rest; u, sat out
+//  11  x: sat32(acc + c1) (vel)    a: doper = round(D(k-1) / 2^DSH)  KF2*acc
+//  12  acc <- e                    p: cap = max/min(head, I(k-1))  KF1*vel
+//  13  x: sat32(e - e1)            p: I(k) = min/max(cap, ic)    KD_A*doper
+//  14  x: e                        a: acc <- f2                  KD_B*dif
+//  15                              a: acc += f1 -> ff            KP*e
+//  16  x: sat32(e + e1)            a: acc <- da
+//  17                              a: acc += db -> D(k)          KI*sum
+// A disabled axis runs the same steps; ic, D(k), v and u are forced to zero.
 `default_nettype none
 
 module pid_core #(
@@ -93,8 +94,11 @@ module pid_core #(
 `include "pid_regs.vh"
   /* verilator lint_on UNUSEDPARAM */
 
+  // The microcode table below has a row per slot cycle: these two are its
+  // shape, not free parameters. FILL_CYCLES: the tick, the back end of the
+  // last axis up to its final write (in slot NAXES, cycle LAST_STEP), done_o.
   localparam integer AXIS_CYCLES = 18;  // one slot per axis, cycles
-  localparam integer FILL_CYCLES = 16;  // tick to first slot + back end of the last axis
+  localparam integer FILL_CYCLES = 16;
   localparam integer LATENCY = NAXES * AXIS_CYCLES + FILL_CYCLES;
   localparam integer SLW = $clog2(NAXES + 1);  // slot 0..NAXES
   localparam integer SAW = SLW + 3;  // state RAM word address {axis, word}
@@ -122,6 +126,7 @@ module pid_core #(
   localparam [SLW-1:0] LAST_SL = NAXES;
   localparam [31:0] LATENCY32 = LATENCY;
   localparam [4:0] LAST_CY = AXIS_CYCLES - 1;
+  localparam [4:0] LAST_STEP = FILL_CYCLES - 2;
   localparam integer LATW = $clog2(LATENCY + 1);  // bits LATENCY needs
   /* verilator lint_on WIDTH */
 
@@ -134,7 +139,7 @@ module pid_core #(
   reg [SLW-1:0] sl;
   reg [    4:0] cy;
   wire          idle = ~run & ~clr;
-  wire          last = (sl == LAST_SL) && (cy == 5'd14);  // the last axis's final write
+  wire          last = (sl == LAST_SL) && (cy == LAST_STEP);  // the last axis's final write
   wire [SLW-1:0] slp = sl - 1'b1;  // the axis whose back end runs in slots' first part
 
   assign busy_o     = ~idle;
@@ -298,7 +303,15 @@ module pid_core #(
 
   // The single read port serves the multiplier during a sweep and the
   // configuration read port between sweeps.
-  wire [CAW-1:0] cr_addr = run ? {{(4 - SLW) {1'b0}}, cr_ax, c_reg} : cfg_raddr;
+  wire [3:0] cr_ax4;  // the axis as a 4-bit register address field
+  generate
+    if (SLW < 4) begin : g_ax4
+      assign cr_ax4 = {{(4 - SLW) {1'b0}}, cr_ax};
+    end else begin : g_ax4
+      assign cr_ax4 = cr_ax;
+    end
+  endgenerate
+  wire [CAW-1:0] cr_addr = run ? {cr_ax4, c_reg} : cfg_raddr;
 
   always @(posedge clk) begin
     if (w_ram) cram[cfg_waddr] <= cfg_wdata;
@@ -487,8 +500,8 @@ module pid_core #(
   reg [2:0] fa_wec;
   // Front ALU steps: operand B from the input chain (else the front RAM),
   // invert B, carry-in, set p (deadband kept), set n (e < -el), result mode
-  // (0 sum, 1 saturate to 32 bits, 2 select B, 3 deadband: zero unless
-  // negative), accumulator write (0 no, 1 yes, 2 if t >= 0, 3 if not p,
+  // (0 sum, 1 saturate cmd - fb to 32 bits, 2 select B, 3 deadband: zero
+  // unless negative), accumulator write (0 no, 1 yes, 2 if t >= 0, 3 if not p,
   // 4 if el != 0 and t >= 0, 5 if n).
   reg fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n;
   reg [1:0] fa_mode_n;
@@ -505,8 +518,8 @@ module pid_core #(
       F_ELSET: {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, Y, Y, N, N, 2'd0, 3'd5};  // then e <- 0 - el
       F_LDQ:   {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, Y, N, N, N, 2'd2, 3'd1};  // acc <- RAM word
       F_SUBQ:  {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, Y, Y, N, N, 2'd0, 3'd1};  // acc -= RAM word
-      F_XADD:  {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, N, N, N, N, 2'd1, 3'd0};  // x <- sat32(acc + word)
-      F_XSUB:  {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, Y, Y, N, N, 2'd1, 3'd0};  // x <- sat32(acc - word)
+      F_XADD:  {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, N, N, N, N, 2'd0, 3'd0};  // x <- sat32(acc + word)
+      F_XSUB:  {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, Y, Y, N, N, 2'd0, 3'd0};  // x <- sat32(acc - word)
       default: {fa_bin_n, fa_inv_n, fa_cin_n, fa_setp_n, fa_setn_n, fa_mode_n, fa_wec_n} = {N, N, N, N, N, 2'd0, 3'd0};
     endcase
   end
@@ -525,18 +538,19 @@ module pid_core #(
   wire            fa_neg = fa_t[FW];
   wire            el_nz = |qf[30:0];  // ELIM = 0 means no clamp
 
-  // Result select codes, two LUT levels behind the adder (the same scheme as
+  // Result select codes, one LUT level behind the adder (the same scheme as
   // the back ALU's): saturation forces bits FW-1..31 to the sign and the
-  // rest to its complement. The deadband's "0 if not negative" is the
-  // accumulator's synchronous reset instead.
-  wire fa_hi1 = &fa_t[FW-1:31];
-  wire fa_hi0 = |fa_t[FW-1:31];
-  wire fa_pos = fa_sm & ~fa_t[FW] & fa_hi0;  // above 2^31 - 1
-  wire fa_ng = fa_sm & fa_t[FW] & ~fa_hi1;  // below -2^31
-  (* keep *) wire [1:0] fk_hi = {fa_pm | fa_ng, fa_pm | fa_pos};  // bits FW-1..31
-  (* keep *) wire [1:0] fk_lo = {fa_pm | fa_pos, fa_pm | fa_ng};  // bits 30..0
+  // rest to its complement. Only cmd - fb saturates here, and its 33-bit
+  // sum overflows 32 bits exactly when bits 32 and 31 differ; the operands
+  // for the multiplier saturate at the operand multiplexer, like the doper.
+  // The deadband's "0 if not negative" is the accumulator's synchronous
+  // reset instead.
+  wire fa_pos = fa_sm & ~fa_t[32] & fa_t[31];  // above 2^31 - 1
+  wire fa_ng = fa_sm & fa_t[32] & ~fa_t[31];  // below -2^31
+  wire [1:0] fk_hi = {fa_pm | fa_ng, fa_pm | fa_pos};  // bits FW-1..31
+  wire [1:0] fk_lo = {fa_pm | fa_pos, fa_pm | fa_ng};  // bits 30..0
 
-  (* keep *) wire [FW-1:0] fa_r;  // kept: ABC would copy it into the operand mux
+  wire [FW-1:0] fa_r;
   generate
     for (g = 0; g < FW; g = g + 1) begin : g_far
       wire [1:0] kk = (g >= 31) ? fk_hi : fk_lo;
@@ -568,15 +582,30 @@ module pid_core #(
   wire            ys, yc;  // used a cycle early, as ys_next and yc_next
   /* verilator lint_on UNUSEDSIGNAL */
   wire [    31:0] ba_xd;  // doper field of the back ALU result
-  // Region codes of x: bits 6..0, 7, 30..8, 31; 0 front ALU, 1 doper
-  // register, 2 zero, 3 one. The doper saturates here: body to ~sign, bit 31
-  // to the sign.
-  // (keep: the codes stay LUT outputs, so each x bit is one 4-input LUT;
-  // left alone, ABC spreads them into every bit.)
-  (* keep *) reg [1:0] xk_lo, xk_7, xk_hi, xk_s;
+  // The operand. Both ALUs' results are registered before the multiplexer
+  // (the front ALU's in fxr, the doper in dreg), so neither ALU's
+  // saturation logic shares a clock cycle with the route to the DSP tiles,
+  // and each x bit is one LUT of flip-flops: a product is consumed four
+  // cycles after the ALU step that made its operand. Region codes of x,
+  // bits 6..0, 7, 30..8, 31: 0 front ALU, 1 doper, 2 zero, 3 one (limits
+  // enter as x = +-2^LIM_S). Both ALUs' operands saturate here: body to
+  // ~sign, bit 31 to the sign.
+  reg [31:0] fxr;
+  reg        fovf, fneg;  // the front ALU's sum is beyond 32 bits; its sign
+  reg [ 1:0] xs_d;  // the x source, one cycle on
+  always @(posedge clk) begin
+    fxr  <= fa_t[31:0];
+    fovf <= ~((&fa_t[FW:31]) | ~(|fa_t[FW:31]));
+    fneg <= fa_t[FW];
+    xs_d <= xs;
+  end
+  reg [1:0] xk_lo, xk_7, xk_hi, xk_s;
   always @(*) begin
-    case (xs)
-      X_FA:    {xk_lo, xk_7, xk_hi, xk_s} = {2'd0, 2'd0, 2'd0, 2'd0};
+    case (xs_d)
+      X_FA: begin
+        if (fovf) {xk_lo, xk_7, xk_hi, xk_s} = {1'b1, ~fneg, 1'b1, ~fneg, 1'b1, ~fneg, 1'b1, fneg};
+        else {xk_lo, xk_7, xk_hi, xk_s} = {2'd0, 2'd0, 2'd0, 2'd0};
+      end
       X_BA: begin
         if (dovf) {xk_lo, xk_7, xk_hi, xk_s} = {1'b1, ~dneg, 1'b1, ~dneg, 1'b1, ~dneg, 1'b1, dneg};
         else {xk_lo, xk_7, xk_hi, xk_s} = {2'd1, 2'd1, 2'd1, 2'd1};
@@ -589,15 +618,9 @@ module pid_core #(
   generate
     for (g = 0; g < 32; g = g + 1) begin : g_mx
       wire [1:0] kk = (g < LIM_S) ? xk_lo : (g == LIM_S) ? xk_7 : (g == 31) ? xk_s : xk_hi;
-      assign mx[g] = kk[1] ? kk[0] : (kk[0] ? ba_xd[g] : fa_r[g]);
+      assign mx[g] = kk[1] ? kk[0] : (kk[0] ? ba_xd[g] : fxr[g]);
     end
   endgenerate
-
-  // The operand is registered here, so neither ALU's saturation logic and the
-  // route to the DSP tiles share a clock cycle: a product is consumed four
-  // cycles after the ALU step that made its operand.
-  reg [31:0] xr;
-  always @(posedge clk) xr <= mx;
 
   // Limits as the twin reads them: ILIM 0 means none (the output limit then
   // bounds the integrator alone), OLIM 0 or above full scale means full scale.
@@ -620,7 +643,7 @@ module pid_core #(
   ) u_mul (
       .clk(clk),
       .m  (mm),
-      .x  (xr),
+      .x  (mx),
       .s  (ms),
       .yw (yw),
       .ys (ys),
@@ -708,10 +731,10 @@ module pid_core #(
   // keeps the raw sum and is saturated at the operand multiplexer.
   wire          ba_pos = ba_sm & ~ba_t[W] & ba_t[W-1];  // overflow upwards
   wire          ba_ng = ba_sm & ba_t[W] & ~ba_t[W-1];  // overflow downwards
-  (* keep *) wire [1:0] bk_s = {ba_pm | ba_ng, ba_pz | ba_pos};
-  (* keep *) wire [1:0] bk_o = {ba_pm | ba_pos, ba_pz | ba_ng};
+  wire [1:0] bk_s = {ba_pm | ba_ng, ba_pz | ba_pos};
+  wire [1:0] bk_o = {ba_pm | ba_pos, ba_pz | ba_ng};
 
-  (* keep *) wire [W-1:0] ba_r;
+  wire [W-1:0] ba_r;
   generate
     for (g = 0; g < W; g = g + 1) begin : g_bar
       wire [1:0] kk = (g == W - 1) ? bk_s : bk_o;
