@@ -81,6 +81,27 @@ constexpr int64_t mul_align(Coef c, int32_t x) {
   return sat_acc(t >> c.s);  // arithmetic shift: floor division
 }
 
+// The same product in the two parts the RTL delivers (rtl/mul_align.v):
+// y = yh + yc. yh is the product aligned with one extra fraction bit, floored,
+// halved and saturated; yc is the rounding increment still to be added, 0
+// when yh is saturated. pid_core's adder takes yc as its carry-in, so the
+// increment needs no adder of its own. mul_align(c, x) == yh + yc always.
+struct MulAlignParts {
+  int64_t yh;  // ACC_W bits signed
+  int yc;      // 0 or 1
+};
+constexpr MulAlignParts mul_align_parts(Coef c, int32_t x) {
+  const i128 p = i128(c.m) * x;
+  const int up = ACC_FRAC + 1 - c.s;  // z = floor(p * 2^up): at most 89 bits
+  const i128 z = up >= 0 ? p * (i128(1) << up) : (p >> -up);
+  const i128 h = z >> 1;
+  const int z0 = int(z & 1);
+  if (h > smax(ACC_W) || h < smin(ACC_W)) return MulAlignParts{sat_acc(h), 0};
+  // h + 1 would be one past the maximum: the maximum itself, no increment.
+  if (h == smax(ACC_W) && z0 != 0) return MulAlignParts{smax(ACC_W), 0};
+  return MulAlignParts{int64_t(h), z0};
+}
+
 // Accumulator (Q.32) to output units, round half up, saturated to OUT_W.
 constexpr int32_t acc_to_out(int64_t v) {
   return int32_t(sat((i128(v) + (i128(1) << (ACC_FRAC - 1))) >> ACC_FRAC, OUT_W));

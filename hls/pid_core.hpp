@@ -33,10 +33,13 @@
 namespace mc {
 
 // Sweep latency in clock cycles, tick to last output: the RTL's schedule
-// (see rtl/pid_core.v). Shortest legal Ts = this value.
-constexpr int pid_axis_cycles = 14;
+// (see rtl/pid_core.v). Each axis has a slot of pid_axis_cycles; the back end
+// of the last axis and the tick add pid_fill_cycles. Shortest legal Ts = this
+// value.
+constexpr int pid_axis_cycles = 18;
+constexpr int pid_fill_cycles = 16;
 constexpr int pid_latency(int naxes) {
-  return 1 + naxes * pid_axis_cycles;
+  return naxes * pid_axis_cycles + pid_fill_cycles;
 }
 
 // Per-axis parameters as stored (the coefficient RAM of the RTL).

@@ -170,18 +170,26 @@ class PidCosimT {
 
   void compare() {
     for (int a = 0; a < kAxes; ++a) {
-      // The dynamic state too: a one-LSB integrator difference can hide
-      // below the output's rounding for a long time.
-      const int64_t si = get_acc(dut_->rootp->pid_core__DOT__st_i, a);
-      const int64_t sd = get_acc(dut_->rootp->pid_core__DOT__st_d, a);
+      // The whole state too, as the RTL's state RAMs hold it (st_* is the
+      // RTL's simulation-only view of them): a one-LSB integrator difference
+      // can hide below the output's rounding for a long time, and a history
+      // word in the wrong ring slot only shows when the input moves.
+      const auto& r = *dut_->rootp;
+      const PidState& ts = twin_.state(a);
+      const int64_t si = get_acc(r.pid_core__DOT__st_i, a);
+      const int64_t sd = get_acc(r.pid_core__DOT__st_d, a);
+      const auto e1 = int32_t(r.pid_core__DOT__st_e1[a]);
+      const auto c1 = int32_t(r.pid_core__DOT__st_c1[a]);
+      const auto c2 = int32_t(r.pid_core__DOT__st_c2[a]);
       const bool ok = u(a) == twin_.u(a) && err(a) == twin_.err(a) && sat(a) == twin_.sat(a) &&
-                      si == twin_.state(a).i && sd == twin_.state(a).d;
+                      si == ts.i && sd == ts.d && e1 == ts.e1 && c1 == ts.c1 && c2 == ts.c2;
       if (!ok && ++mismatches_ <= 5) {
         std::ostringstream os;
         os << "sample " << samples_ << " axis " << a << ": rtl u=" << u(a) << " err=" << err(a)
            << " sat=" << sat(a) << ", twin u=" << twin_.u(a) << " err=" << twin_.err(a)
-           << " sat=" << twin_.sat(a) << "; state rtl i=" << si << " d=" << sd
-           << ", twin i=" << twin_.state(a).i << " d=" << twin_.state(a).d << " (cmd=" << cmd_[a]
+           << " sat=" << twin_.sat(a) << "; state rtl i=" << si << " d=" << sd << " e1=" << e1
+           << " c1=" << c1 << " c2=" << c2 << ", twin i=" << ts.i << " d=" << ts.d
+           << " e1=" << ts.e1 << " c1=" << ts.c1 << " c2=" << ts.c2 << " (cmd=" << cmd_[a]
            << " fb=" << fb_[a] << ")";
         ADD_FAILURE() << os.str();
       }

@@ -1,8 +1,10 @@
-// mul_align RTL against mc::mul_align (the twin) and against an independent
-// exact-rational reference: random operands over every shift, plus the
-// extremes of both operands.
+// mul_align RTL against mc::mul_align_parts (the twin) and against an
+// independent exact-rational reference: random operands over every shift,
+// streamed one per cycle, plus the extremes of both operands and products that
+// round exactly onto the saturation limits.
 #include <gtest/gtest.h>
 
+#include <deque>
 #include <memory>
 #include <random>
 
@@ -27,29 +29,67 @@ int64_t reference(int32_t m, int32_t x, int s) {
   return sat(q, ACC_W);
 }
 
+// The RTL streams: one operand pair per clock edge, each result three edges
+// after its operands (the edge that samples them included). The harness keeps
+// the operands in flight and checks every result against the twin's parts,
+// the twin's whole product and the independent reference.
 class MulAlignSim {
  public:
+  static constexpr int kLatency = 3;
   MulAlignSim() : ctx_(std::make_unique<VerilatedContext>()) {
     ctx_->randReset(2);
     dut_ = std::make_unique<Vmul_align>(ctx_.get());
   }
-  // Pipelined: push one operand pair per cycle, results come two cycles later.
-  int64_t run(int32_t m, int32_t x, int s) {
+  // Present one operand pair, clock once, check the result that came out.
+  void push(int32_t m, int32_t x, int s) {
+    flight_.push_back(Op{m, x, s, edges_ + 1});
+    clock(m, x, s);
+  }
+  // Clock the last operands out (with zero operands that are not checked).
+  void drain() {
+    while (!flight_.empty()) clock(0, 0, 0);
+  }
+  int checked() const { return checked_; }
+
+ private:
+  struct Op {
+    int32_t m, x;
+    int s;
+    int64_t edge;  // the clock edge that sampled the operands
+  };
+  void clock(int32_t m, int32_t x, int s) {
     dut_->m = uint32_t(m) & 0xFFFFFF;
     dut_->x = uint32_t(x);
     dut_->s = uint8_t(s);
-    for (int i = 0; i < 2; ++i) {
-      dut_->clk = 0;
-      dut_->eval();
-      dut_->clk = 1;
-      dut_->eval();
-    }
-    return sext(dut_->y, ACC_W);
+    dut_->clk = 0;
+    dut_->eval();
+    dut_->clk = 1;
+    dut_->eval();
+    ++edges_;
+    // Operands sampled at edge n come out after edge n + kLatency - 1.
+    if (flight_.empty() || edges_ < flight_.front().edge + kLatency - 1) return;
+    const Op o = flight_.front();
+    flight_.pop_front();
+    check(o);
   }
-
- private:
+  void check(const Op& o) {
+    const MulAlignParts want = mul_align_parts(Coef{o.m, o.s}, o.x);
+    const int64_t twin = mul_align(Coef{o.m, o.s}, o.x);
+    ASSERT_EQ(want.yh + want.yc, twin) << "m=" << o.m << " x=" << o.x << " s=" << o.s;
+    ASSERT_EQ(twin, reference(o.m, o.x, o.s)) << "m=" << o.m << " x=" << o.x << " s=" << o.s;
+    // Decode the RTL's sign-folded body: y = {ys, yw ^ ys} + yc.
+    const uint64_t body = (uint64_t(1) << (ACC_W - 1)) - 1;
+    const uint64_t yw = dut_->ys ? (~dut_->yw & body) : (dut_->yw & body);
+    const int64_t yh = sext(yw | (uint64_t(dut_->ys) << (ACC_W - 1)), ACC_W);
+    ASSERT_EQ(yh, want.yh) << "m=" << o.m << " x=" << o.x << " s=" << o.s;
+    ASSERT_EQ(int(dut_->yc), want.yc) << "m=" << o.m << " x=" << o.x << " s=" << o.s;
+    ++checked_;
+  }
   std::unique_ptr<VerilatedContext> ctx_;
   std::unique_ptr<Vmul_align> dut_;
+  std::deque<Op> flight_;
+  int64_t edges_ = 0;
+  int checked_ = 0;
 };
 
 TEST(MulAlign, RandomAllShiftsMatchTwinAndReference) {
@@ -60,10 +100,10 @@ TEST(MulAlign, RandomAllShiftsMatchTwinAndReference) {
     const int32_t m = int32_t(sext(rng(), COEF_M_W));
     int32_t x = int32_t(rng());
     x >>= int(rng() % 32);  // spread magnitudes
-    const int64_t twin = mul_align(Coef{m, s}, x);
-    ASSERT_EQ(twin, reference(m, x, s)) << "m=" << m << " x=" << x << " s=" << s;
-    ASSERT_EQ(sim.run(m, x, s), twin) << "m=" << m << " x=" << x << " s=" << s;
+    sim.push(m, x, s);
   }
+  sim.drain();
+  EXPECT_EQ(sim.checked(), 200000);
 }
 
 TEST(MulAlign, Extremes) {
@@ -72,11 +112,46 @@ TEST(MulAlign, Extremes) {
   const int32_t xs[] = {INT32_MIN, -1, 0, 1, INT32_MAX};
   for (int32_t m : ms)
     for (int32_t x : xs)
-      for (int s = 0; s < 64; ++s) {
-        const int64_t twin = mul_align(Coef{m, s}, x);
-        ASSERT_EQ(twin, reference(m, x, s));
-        ASSERT_EQ(sim.run(m, x, s), twin) << "m=" << m << " x=" << x << " s=" << s;
-      }
+      for (int s = 0; s < 64; ++s) sim.push(m, x, s);
+  sim.drain();
+}
+
+// Products whose rounding lands exactly on the saturation limits. With
+// z = floor(m * x * 2^(33 - s)) (one extra fraction bit): z = 2^50 - 1 rounds
+// to 2^49, one past the maximum, so the increment must be dropped;
+// z = -2^50 - 1 rounds to exactly the minimum; z = -2^50 - 2 is one below it.
+// Random operands practically never land there; these operands were found by
+// factoring, and the test checks that each one is on its edge.
+TEST(MulAlign, RoundingAtTheLimits) {
+  struct Edge {
+    int32_t m, x;
+    int s;
+    i128 z;
+  };
+  const i128 two50 = i128(1) << 50;
+  const Edge edges[] = {
+      {614141, 1833292203, 33, two50 - 1},     {1082401, 2080374846, 34, two50 - 1},
+      {2164802, 2080374846, 35, two50 - 1},    {4329604, 2080374846, 36, two50 - 1},
+      {818201, -1376067625, 33, -two50 - 1},   {1342505, -1677312050, 34, -two50 - 1},
+      {2685010, -1677312050, 35, -two50 - 1},  {5370020, -1677312050, 36, -two50 - 1},
+      {3836089, -587004059, 34, -two50 - 2},   {3836089, -1174008118, 35, -two50 - 2},
+      {7601985, -1184848333, 36, -two50 - 2},
+  };
+  MulAlignSim sim;
+  for (const Edge& e : edges) {
+    const i128 p = i128(e.m) * e.x;
+    ASSERT_EQ(p >> (e.s - 33), e.z) << "not on its edge: m=" << e.m << " x=" << e.x;
+    const MulAlignParts pa = mul_align_parts(Coef{e.m, e.s}, e.x);
+    if (e.z == two50 - 1) {
+      EXPECT_EQ(pa.yh, smax(ACC_W));
+      EXPECT_EQ(pa.yc, 0);
+    }
+    if (e.z == -two50 - 1) {
+      EXPECT_EQ(pa.yh + pa.yc, smin(ACC_W));
+    }
+    sim.push(e.m, e.x, e.s);
+  }
+  sim.drain();
 }
 
 TEST(MulAlign, RoundsHalfUpAndSaturates) {
