@@ -39,6 +39,25 @@
 
 namespace mc {
 
+// The quadrant of (x, y) for a direction, and the two moves it allows: one
+// per axis, towards minus when mxn/myn. q: 0..3 = Q1..Q4 (see the table
+// above). The RTL forms the same `upper` (Q1, Q2) and `right` (Q1, Q4).
+struct ArcQuadrant {
+  int q = 0;
+  int mx = 1, my = 1;  // +1 or -1
+};
+inline ArcQuadrant arc_quadrant(int64_t x, int64_t y, bool ccw) {
+  const bool upper = ccw ? ((x > 0 && y >= 0) || (x <= 0 && y > 0))   // Q1, Q2
+                         : ((x >= 0 && y > 0) || (x < 0 && y >= 0));  // Q1, Q2
+  const bool right = ccw ? ((x > 0 && y >= 0) || (x >= 0 && y < 0))   // Q1, Q4
+                         : ((x >= 0 && y > 0) || (x > 0 && y <= 0));  // Q1, Q4
+  ArcQuadrant a;
+  a.q = upper ? (right ? 0 : 1) : (right ? 3 : 2);
+  a.mx = (upper != ccw) ? 1 : -1;
+  a.my = (right == ccw) ? 1 : -1;
+  return a;
+}
+
 // One iteration's decision.
 struct ArcStep {
   bool movex = false;    // move x (else y)
@@ -67,13 +86,8 @@ class ArcInterp {
   bool fin() const { return final_quadrant() && x_ == xe_ && y_ == ye_; }
 
   ArcStep step() const {
-    const bool upper = ccw_ ? ((x_ > 0 && y_ >= 0) || (x_ <= 0 && y_ > 0))   // Q1, Q2
-                            : ((x_ >= 0 && y_ > 0) || (x_ < 0 && y_ >= 0));  // Q1, Q2
-    const bool right = ccw_ ? ((x_ > 0 && y_ >= 0) || (x_ >= 0 && y_ < 0))   // Q1, Q4
-                            : ((x_ >= 0 && y_ > 0) || (x_ > 0 && y_ <= 0));  // Q1, Q4
-    const int mx = (upper != ccw_) ? 1 : -1;
-    const int my = (right == ccw_) ? 1 : -1;
-    // The X move is outward when it does not shrink |x|.
+    const ArcQuadrant qd = arc_quadrant(x_, y_, ccw_);
+    const int mx = qd.mx, my = qd.my;
     const bool xo = x_ == 0 || ((x_ < 0) == (mx < 0));
     const int64_t s = int64_t(d_) + mx * int64_t(x_) + my * int64_t(y_);
     const bool xlock = final_quadrant() && x_ == xe_;
@@ -87,8 +101,8 @@ class ArcInterp {
     return st;
   }
 
-  void iterate() {
-    const ArcStep st = step();
+  // Commit one iteration: st is step() of the current state.
+  void iterate(const ArcStep& st) {
     int32_t& c = st.movex ? x_ : y_;
     // (c + m)^2 - c^2 = 2*m*c + 1
     d_ = int32_t(sext(uint64_t(int64_t(d_) + int64_t(2 * st.dir) * c + 1), seg::D_W));

@@ -113,8 +113,8 @@ class InterpCore {
       if (ridx == seg::W_N) n_left_ = ldata & seg::N_MASK;
     }
     if (it) {
-      if (type_ == seg::T_LINE) line_.iterate();
-      if (type_ == seg::T_ARC) arc_.iterate();
+      if (type_ == seg::T_LINE) line_.iterate(lmv);
+      if (type_ == seg::T_ARC) arc_.iterate(as);
       n_left_ = (n_left_ - 1) & seg::N_MASK;
       for (int a = 0; a < 3; ++a)
         if ((mv >> a) & 1) pos_[a] = sat32(i128(pos_[a]) + (((neg >> a) & 1) ? -1 : 1));

@@ -44,13 +44,13 @@ class LineInterp {
   }
   int neg() const { return neg_; }
 
-  // Commit one iteration.
-  void iterate() {
+  // Commit one iteration: mv is moves() of the current state.
+  void iterate(int mv) {
     for (int a = 0; a < 3; ++a) {
       const int64_t s = int64_t(e_[a]) + 2 * int64_t(d_[a]);
       // E_W bits, as the RTL register: only a malformed segment (|d| > N)
       // ever reaches the top bit, and then both wrap alike.
-      e_[a] = uint32_t(step_test(a) ? s - 2 * int64_t(n_) : s) & E_MASK;
+      e_[a] = uint32_t(((mv >> a) & 1) ? s - 2 * int64_t(n_) : s) & E_MASK;
     }
   }
 

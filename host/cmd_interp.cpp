@@ -120,6 +120,7 @@ void line_command(const InterpOptions& o) {
     j["feed_counts_per_s"] = parse_feed(o.feed);
     j["iteration_rate_hz"] = rate;
     j["duration_s"] = p.duration;
+    j["feed_rel_error"] = p.feed_rel_error;
     j["end_exact"] = st.last == p.end;
     std::cout << j.dump(2) << '\n';
     return;
@@ -130,6 +131,7 @@ void line_command(const InterpOptions& o) {
             << "  length " << g6(p.length) << " counts; feed " << g6(parse_feed(o.feed))
             << " counts/s -> iteration rate " << g6(rate) << " /s, duration " << format_duration(p.duration)
             << "\n"
+            << "  rate word realizes the feed to a relative " << g6(p.feed_rel_error) << "\n"
             << "  end point " << pt(st.last, dims) << (st.last == p.end ? ": exact" : ": MISSED") << '\n';
 }
 
@@ -140,7 +142,7 @@ void arc_command(const InterpOptions& o) {
   const auto c = parse_point(o.center, "--center", 2, 2);
   const double feed = parse_feed(o.feed);
   const PlannedSegment p = plan_arc(to_vec3(a), to_vec3(b), {c[0], c[1]}, o.ccw, feed);
-  const ArcGeometry g = arc_geometry(a[0] - c[0], a[1] - c[1], b[0] - c[0], b[1] - c[1], o.ccw);
+  const ArcGeometry& g = p.arc;
   const std::array<double, 3> circle{double(c[0]), double(c[1]), g.radius};
   const PathStats st = run(p, 2, o.csv, &circle);
   if (o.csv) return;
@@ -161,6 +163,7 @@ void arc_command(const InterpOptions& o) {
     j["length_counts"] = p.length;
     j["feed_counts_per_s"] = feed;
     j["duration_s"] = p.duration;
+    j["feed_rel_error"] = p.feed_rel_error;
     j["end_exact"] = st.last == p.end;
     std::cout << j.dump(2) << '\n';
     return;
@@ -174,6 +177,7 @@ void arc_command(const InterpOptions& o) {
             << "  max radial deviation " << g6(st.max_dev) << " steps, at " << pt(st.worst, 2) << '\n'
             << "  length " << g6(p.length) << " counts; feed " << g6(feed)
             << " counts/s held along the tangent, duration " << format_duration(p.duration) << '\n'
+            << "  rate words realize the feed to a relative " << g6(p.feed_rel_error) << '\n'
             << "  end point " << pt(st.last, 2) << (st.last == p.end ? ": exact" : ": MISSED") << '\n';
 }
 

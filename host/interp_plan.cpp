@@ -39,13 +39,6 @@ uint64_t rate_word(double f, double clk_hz, const char* what) {
   return uint64_t(inc);
 }
 
-// Moves allowed in quadrant q: (mx, my).
-std::array<int, 2> quadrant_moves(int q, bool ccw) {
-  static constexpr int CCW[4][2] = {{-1, 1}, {-1, -1}, {1, -1}, {1, 1}};
-  static constexpr int CW[4][2] = {{1, -1}, {1, 1}, {-1, 1}, {-1, -1}};
-  return ccw ? std::array<int, 2>{CCW[q][0], CCW[q][1]} : std::array<int, 2>{CW[q][0], CW[q][1]};
-}
-
 // Where the walk leaves quadrant q.
 std::array<int64_t, 2> quadrant_exit(int q, bool ccw, int64_t c) {
   static constexpr int CCW[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};
@@ -54,26 +47,12 @@ std::array<int64_t, 2> quadrant_exit(int q, bool ccw, int64_t c) {
   return {t[q][0] * c, t[q][1] * c};
 }
 
-// e lies ahead of p on a monotone walk in quadrant q (or is p).
-bool ahead(int64_t px, int64_t py, int64_t ex, int64_t ey, int q, bool ccw) {
-  const auto m = quadrant_moves(q, ccw);
-  return (ex - px) * m[0] >= 0 && (ey - py) * m[1] >= 0;
+// e lies ahead of p (or is p) on a walk making the moves of m.
+bool ahead(int64_t px, int64_t py, int64_t ex, int64_t ey, const ArcQuadrant& m) {
+  return (ex - px) * m.mx >= 0 && (ey - py) * m.my >= 0;
 }
 
 }  // namespace
-
-int arc_quadrant(int64_t x, int64_t y, bool ccw) {
-  if (ccw) {
-    if (x > 0 && y >= 0) return 0;
-    if (x <= 0 && y > 0) return 1;
-    if (x < 0 && y <= 0) return 2;
-    return 3;
-  }
-  if (x >= 0 && y > 0) return 0;
-  if (x < 0 && y >= 0) return 1;
-  if (x <= 0 && y < 0) return 2;
-  return 3;
-}
 
 int64_t arc_axis_crossing(int64_t r2) {
   auto c = int64_t(std::sqrt(double(r2)));
@@ -109,11 +88,12 @@ ArcGeometry arc_geometry(int64_t x0, int64_t y0, int64_t xe, int64_t ye, bool cc
                      "a point within one step of the circle of radius " + format_number(g.radius),
                      "it is " + format_number(re - g.radius) + " steps off the circle");
   g.crossing = arc_axis_crossing(g.r2);
-  g.q0 = arc_quadrant(x0, y0, ccw);
-  g.qf = arc_quadrant(xe, ye, ccw);
+  const ArcQuadrant qs = arc_quadrant(x0, y0, ccw), qe = arc_quadrant(xe, ye, ccw);
+  g.q0 = qs.q;
+  g.qf = qe.q;
   const int k = ((ccw ? g.qf - g.q0 : g.q0 - g.qf) + 4) % 4;
   const bool same_point = x0 == xe && y0 == ye;
-  g.nq = k != 0 ? k : ((!same_point && ahead(x0, y0, xe, ye, g.q0, ccw)) ? 0 : 4);
+  g.nq = k != 0 ? k : ((!same_point && ahead(x0, y0, xe, ye, qs)) ? 0 : 4);
 
   // Steps: |dx| + |dy| over each quadrant piece the walk runs through.
   int64_t px = x0, py = y0;
@@ -125,7 +105,7 @@ ArcGeometry arc_geometry(int64_t x0, int64_t y0, int64_t xe, int64_t ye, bool cc
     py = ex[1];
     q = (q + (ccw ? 1 : 3)) % 4;
   }
-  if (!ahead(px, py, xe, ye, g.qf, ccw))
+  if (!ahead(px, py, xe, ye, qe))
     throw InputError("arc end point", point(xe, ye) + " relative to the centre",
                      "a point the stairs path reaches from " + point(px, py) + " in its quadrant",
                      "it lies behind the path in one axis");
@@ -185,6 +165,7 @@ PlannedSegment plan_arc(const Vec3& from, const Vec3& to, const std::array<int64
   PlannedSegment p;
   p.start = from;
   p.end = to;
+  p.arc = g;
   p.length = g.radius * g.sweep;
   p.duration = p.length / feed;
   seg::Segment& s = p.seg;
@@ -244,7 +225,7 @@ void walk(const PlannedSegment& p, const std::function<void(const Vec3&)>& visit
       const int mv = li.moves();
       for (int a = 0; a < 3; ++a)
         if ((mv >> a) & 1) pos[size_t(a)] += ((li.neg() >> a) & 1) ? -1 : 1;
-      li.iterate();
+      li.iterate(mv);
       visit(pos);
     }
   } else if (p.seg.type == seg::T_ARC) {
@@ -254,7 +235,7 @@ void walk(const PlannedSegment& p, const std::function<void(const Vec3&)>& visit
     for (uint32_t k = 0; k < p.seg.n && !ai.fin(); ++k) {
       const ArcStep st = ai.step();
       pos[size_t(axes[st.movex ? 0 : 1])] += st.dir;
-      ai.iterate();
+      ai.iterate(st);
       visit(pos);
     }
   }

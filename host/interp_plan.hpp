@@ -20,15 +20,6 @@ using Vec3 = std::array<int64_t, 3>;
 // The board clock (iCEBreaker's 12 MHz oscillator); configs may override.
 constexpr double kDefaultClockHz = 12e6;
 
-struct PlannedSegment {
-  seg::Segment seg;
-  Vec3 start{};               // absolute counts
-  Vec3 end{};                 // absolute counts
-  double length = 0;          // path length of the ideal line/arc, counts
-  double duration = 0;        // at the commanded feed, s
-  double feed_rel_error = 0;  // quantization of the rate words, relative
-};
-
 // Circle geometry of an arc, relative to its centre, as the core walks it.
 struct ArcGeometry {
   int64_t x0 = 0, y0 = 0, xe = 0, ye = 0;
@@ -42,8 +33,16 @@ struct ArcGeometry {
   double sweep = 0;      // swept angle, rad
 };
 
-// Quadrant of (x, y) for the walk direction (see hls/arc_interp.hpp), 0..3.
-int arc_quadrant(int64_t x, int64_t y, bool ccw);
+struct PlannedSegment {
+  seg::Segment seg;
+  Vec3 start{};               // absolute counts
+  Vec3 end{};                 // absolute counts
+  double length = 0;          // path length of the ideal line/arc, counts
+  double duration = 0;        // at the commanded feed, s
+  double feed_rel_error = 0;  // quantization of the rate words, relative
+  ArcGeometry arc;            // arcs only
+};
+
 // The axis crossing c of the stairs path of a circle of R^2 = r2: the integer
 // with c(c-1) < r2 <= c(c+1).
 int64_t arc_axis_crossing(int64_t r2);

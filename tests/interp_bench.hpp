@@ -53,16 +53,12 @@ struct SegGen {
       if (kind == 3) d = irange(-2, 2);
       to[size_t(a)] += d;
     }
-    int64_t n = 0;
-    double l2 = 0;
-    for (int a = 0; a < 3; ++a) {
-      const int64_t d = to[size_t(a)] - at[size_t(a)];
-      n = std::max<int64_t>(n, std::llabs(d));
-      l2 += double(d) * double(d);
-    }
+    // Plan once for the geometry, then again at the feed that gives the
+    // iteration rate drawn.
+    const PlannedSegment g = host::plan_line(at, to, 1000.0, kClk);
+    if (g.seg.n == 0) return g;
     const double f = uni(min_rate, max_rate) * kClk;
-    const double feed = n == 0 ? 1000.0 : f * std::sqrt(l2) / double(n);
-    return host::plan_line(at, to, feed, kClk);
+    return host::plan_line(at, to, f * g.length / double(g.seg.n), kClk);
   }
 
   PlannedSegment arc(const Vec3& at) {

@@ -181,16 +181,15 @@ class PidCosimT {
       const auto e1 = int32_t(r.pid_core__DOT__st_e1[a]);
       const auto c1 = int32_t(r.pid_core__DOT__st_c1[a]);
       const auto c2 = int32_t(r.pid_core__DOT__st_c2[a]);
-      const bool ok = u(a) == twin_.u(a) && err(a) == twin_.err(a) && sat(a) == twin_.sat(a) &&
-                      si == ts.i && sd == ts.d && e1 == ts.e1 && c1 == ts.c1 && c2 == ts.c2;
+      const bool ok = u(a) == twin_.u(a) && err(a) == twin_.err(a) && sat(a) == twin_.sat(a) && si == ts.i &&
+                      sd == ts.d && e1 == ts.e1 && c1 == ts.c1 && c2 == ts.c2;
       if (!ok && ++mismatches_ <= 5) {
         std::ostringstream os;
         os << "sample " << samples_ << " axis " << a << ": rtl u=" << u(a) << " err=" << err(a)
            << " sat=" << sat(a) << ", twin u=" << twin_.u(a) << " err=" << twin_.err(a)
-           << " sat=" << twin_.sat(a) << "; state rtl i=" << si << " d=" << sd << " e1=" << e1
-           << " c1=" << c1 << " c2=" << c2 << ", twin i=" << ts.i << " d=" << ts.d
-           << " e1=" << ts.e1 << " c1=" << ts.c1 << " c2=" << ts.c2 << " (cmd=" << cmd_[a]
-           << " fb=" << fb_[a] << ")";
+           << " sat=" << twin_.sat(a) << "; state rtl i=" << si << " d=" << sd << " e1=" << e1 << " c1=" << c1
+           << " c2=" << c2 << ", twin i=" << ts.i << " d=" << ts.d << " e1=" << ts.e1 << " c1=" << ts.c1
+           << " c2=" << ts.c2 << " (cmd=" << cmd_[a] << " fb=" << fb_[a] << ")";
         ADD_FAILURE() << os.str();
       }
     }

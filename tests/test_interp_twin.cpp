@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "interp_bench.hpp"
@@ -55,6 +56,7 @@ TEST(InterpTwin, ArcPointsHugTheCircleWithinHalfADiagonal) {
   }
   EXPECT_LE(worst, std::sqrt(0.5) + 1e-12);
   EXPECT_GT(worst, 0.6);  // the bound is reached, not vacuous
+  std::printf("arc walk, 600 full circles up to R = 3000: worst radial deviation %.4f steps\n", worst);
 }
 
 TEST(InterpTwin, FullCirclesAtTheLargestRadii) {
