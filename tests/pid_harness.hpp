@@ -30,9 +30,7 @@ template <typename Model, int NAXES>
 class PidCosimT {
  public:
   static constexpr int kAxes = NAXES;
-  explicit PidCosimT(uint32_t seed) : ctx_(std::make_unique<VerilatedContext>()) {
-    ctx_->randReset(2);  // random initial state flushes out missing resets
-    ctx_->randSeed(int(seed & 0x7fffffff));
+  explicit PidCosimT(uint32_t seed) : ctx_(random_context(seed)) {
     dut_ = std::make_unique<Model>(ctx_.get(), "pid_core");
     twin_.reset();
     // Reset cycles are not scoreboarded: whatever random state the model

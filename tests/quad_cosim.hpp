@@ -10,6 +10,7 @@
 
 #include "quad_harness.hpp"
 #include "verilated.h"
+#include "vl_ports.hpp"
 
 namespace mc::test {
 
@@ -18,9 +19,7 @@ template <typename Model, typename Twin>
 class QuadCosimT {
  public:
   using TwinT = Twin;
-  explicit QuadCosimT(uint32_t seed) : ctx_(std::make_unique<VerilatedContext>()) {
-    ctx_->randReset(2);  // random initial state flushes out missing resets
-    ctx_->randSeed(int(seed & 0x7fffffff));
+  explicit QuadCosimT(uint32_t seed) : ctx_(random_context(seed)) {
     dut_ = std::make_unique<Model>(ctx_.get(), "quad_decoder");
     // Reset, pins low, not scoreboarded: whatever the RTL powered up in, three
     // clocks of reset must bring it to the twin's state.

@@ -31,9 +31,7 @@ uint64_t env_or(const char* name, uint64_t dflt) {
 
 class InterpCosim {
  public:
-  explicit InterpCosim(uint32_t seed) : ctx_(std::make_unique<VerilatedContext>()) {
-    ctx_->randReset(2);  // random power-up state: the reset must bring it to the twin's
-    ctx_->randSeed(int(seed & 0x7fffffff));
+  explicit InterpCosim(uint32_t seed) : ctx_(random_context(seed)) {
     dut_ = std::make_unique<Vinterp_core>(ctx_.get(), "interp_core");
     twin_.reset();
     drive(InterpIn{});

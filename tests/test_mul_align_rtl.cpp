@@ -11,6 +11,7 @@
 #include "Vmul_align.h"
 #include "mc_fixed.hpp"
 #include "verilated.h"
+#include "vl_ports.hpp"
 
 namespace mc {
 namespace {
@@ -36,10 +37,7 @@ int64_t reference(int32_t m, int32_t x, int s) {
 class MulAlignSim {
  public:
   static constexpr int kLatency = 3;
-  MulAlignSim() : ctx_(std::make_unique<VerilatedContext>()) {
-    ctx_->randReset(2);
-    dut_ = std::make_unique<Vmul_align>(ctx_.get());
-  }
+  MulAlignSim() : ctx_(test::random_context(1)) { dut_ = std::make_unique<Vmul_align>(ctx_.get()); }
   // Present one operand pair, clock once, check the result that came out.
   void push(int32_t m, int32_t x, int s) {
     flight_.push_back(Op{m, x, s, edges_ + 1});

@@ -1,8 +1,9 @@
-// Port access for Verilated models in the testbenches.
+// Port access and contexts for Verilated models in the testbenches.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "verilated.h"
 
@@ -28,6 +29,15 @@ template <std::size_t N>
 uint32_t get_bits(const VlWide<N>& p, int lsb, int w) {
   const uint64_t lo = p[lsb / 32], hi = (lsb / 32 + 1 < int(N)) ? p[lsb / 32 + 1] : 0;
   return uint32_t((((hi << 32) | lo) >> (lsb % 32)) & ((uint64_t(1) << w) - 1));
+}
+
+// A context whose models power up in random state (randReset(2)), seeded so
+// that a failure reproduces: a missing reset shows as a twin mismatch.
+inline std::unique_ptr<VerilatedContext> random_context(uint32_t seed) {
+  auto ctx = std::make_unique<VerilatedContext>();
+  ctx->randReset(2);
+  ctx->randSeed(int(seed & 0x7fffffff));
+  return ctx;
 }
 
 }  // namespace mc::test
