@@ -26,6 +26,11 @@
 // planner checks both). N, also from the host, bounds the walk whatever it is
 // given.
 //
+// Timing (as the RTL): the quadrant and then the decision are registered, so
+// they belong to the current state only two clocks after a load word or an
+// iteration; ready() says so, and the sequencer neither steps nor ends an arc
+// until it is.
+//
 // Quadrants, with the axis points assigned so that the walk leaves a quadrant
 // exactly when an inward move makes a coordinate zero:
 //   ccw: Q1 x>0,y>=0  Q2 x<=0,y>0  Q3 x<0,y<=0  Q4 x>=0,y<0
@@ -69,6 +74,7 @@ struct ArcStep {
 class ArcInterp {
  public:
   void load(int idx, uint32_t w) {
+    quiet_ = 0;
     if (idx == seg::W_HDR) {
       ccw_ = (w >> seg::H_CCW) & 1;
       nq_ = (w >> seg::H_NQ_LSB) & 7;
@@ -80,6 +86,10 @@ class ArcInterp {
     if (idx == seg::W_D) ye_ = int32_t(sext(w, seg::ARC_W));
     if (idx == seg::W_E) d_ = int32_t(sext(w, seg::D_W));
   }
+
+  // A clock with neither a load word nor an iteration.
+  void settle() { quiet_ = quiet_ < 2 ? quiet_ + 1 : 2; }
+  bool ready() const { return quiet_ == 2; }
 
   bool final_quadrant() const { return cross_ == nq_; }
   // The end point is reached: the segment is over.
@@ -103,6 +113,7 @@ class ArcInterp {
 
   // Commit one iteration: st is step() of the current state.
   void iterate(const ArcStep& st) {
+    quiet_ = 0;
     int32_t& c = st.movex ? x_ : y_;
     // (c + m)^2 - c^2 = 2*m*c + 1
     d_ = int32_t(sext(uint64_t(int64_t(d_) + int64_t(2 * st.dir) * c + 1), seg::D_W));
@@ -122,6 +133,7 @@ class ArcInterp {
   int cross_ = 0;
   int nq_ = 0;
   bool ccw_ = false;
+  int quiet_ = 0;  // clocks since the state last changed, up to 2
 };
 
 }  // namespace mc

@@ -71,8 +71,10 @@ class InterpCore {
     const bool fire = feed_.fire();
     const int count = fifo_.count();
     const bool running = st_ == ST_RUN;
-    const bool fin = n_left_ == 0 || (type_ == seg::T_ARC && arc_.fin());
-    const bool it = running && !fin && pend_ != 0 && !in.hold && !in.abort;
+    // An arc's decision is registered (see hls/arc_interp.hpp): valid when ready.
+    const bool arc = type_ == seg::T_ARC;
+    const bool fin = n_left_ == 0 || (arc && arc_.ready() && arc_.fin());
+    const bool it = running && !fin && pend_ != 0 && !in.hold && !in.abort && (!arc || arc_.ready());
     const ArcStep as = arc_.step();
     const int lmv = line_.moves();
     int mv = 0, neg = 0;  // bit a: axis a moves / moves negative
@@ -114,11 +116,12 @@ class InterpCore {
     }
     if (it) {
       if (type_ == seg::T_LINE) line_.iterate(lmv);
-      if (type_ == seg::T_ARC) arc_.iterate(as);
+      if (arc) arc_.iterate(as);
       n_left_ = (n_left_ - 1) & seg::N_MASK;
       for (int a = 0; a < 3; ++a)
         if ((mv >> a) & 1) pos_[a] = sat32(i128(pos_[a]) + (((neg >> a) & 1) ? -1 : 1));
     }
+    if (!ld && !(it && arc)) arc_.settle();
     const int pend_n = pend_ + int(fire) - int(it);
     pend_ = pend_n > 3 ? 3 : pend_n;
 

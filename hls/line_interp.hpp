@@ -9,9 +9,9 @@
 // run backwards. After k iterations axis a should sit at k*d/N rounded to the
 // nearest count, with ties broken the same way in absolute coordinates
 // whichever direction the axis runs (towards minus infinity here). In a
-// doubled error term E (start N, add 2d, overflow at 2N) that is: a positive
-// axis steps when E + 2d - 2N > 0, a negative one when >= 0. No arithmetic at
-// load: E starts at N. docs/numerics.md derives it.
+// doubled error term E (add 2d per iteration, step and subtract 2N when
+// E + 2d - 2N >= 0) that is: E starts at N for an axis running towards minus
+// and at N - 1 for one running towards plus. docs/numerics.md derives it.
 #pragma once
 
 #include <cstdint>
@@ -30,7 +30,7 @@ class LineInterp {
     if (idx == seg::W_HDR) neg_ = (w >> seg::H_NEG_LSB) & 7;
     if (idx == seg::W_N) {
       n_ = w & seg::N_MASK;
-      for (uint32_t& e : e_) e = n_;
+      for (int a = 0; a < 3; ++a) e_[a] = (n_ - (((neg_ >> a) & 1) ? 0 : 1)) & E_MASK;
     }
     if (idx >= seg::W_A && idx < seg::W_A + 3) d_[idx - seg::W_A] = w & seg::N_MASK;
   }
@@ -57,7 +57,7 @@ class LineInterp {
  private:
   bool step_test(int a) const {
     const int64_t t = int64_t(e_[a]) + 2 * int64_t(d_[a]) - 2 * int64_t(n_);
-    return ((neg_ >> a) & 1) ? t >= 0 : t > 0;
+    return t >= 0;
   }
 
   uint32_t n_ = 0;

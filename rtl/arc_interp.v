@@ -2,11 +2,13 @@
 // (which explains the decision rule, the quadrant assignment and the end).
 //
 // How to drive it: stream the segment words through ld_i/ld_idx_i/ld_data_i
-// (header for the direction and nq, then x0, y0, xe, ye, D0). While fin_o is
-// low, each iteration moves one coordinate one count: x if movex_o else y,
-// towards minus if neg_o; outward_o says |x|+|y| grew (for the feed
-// generator); it_i commits. No multiplier: D = x^2 + y^2 - R^2 follows by
-// adding 2*m*c + 1 for a move of coordinate c by m.
+// (header for the direction and nq, then x0, y0, xe, ye, D0). The decision
+// for the next iteration is registered: it is valid while rdy_o is high, which
+// is two clocks after a load word or an iteration. Then, while fin_o is low,
+// an iteration moves one coordinate one count: x if movex_o else y, towards
+// minus if neg_o; outward_o says |x|+|y| grew (for the feed generator); it_i
+// commits. No multiplier: D = x^2 + y^2 - R^2 follows by adding 2*m*c + 1 for
+// a move of coordinate c by m.
 `default_nettype none
 
 module arc_interp (
@@ -18,10 +20,11 @@ module arc_interp (
     input  wire [31:0] ld_data_i,
     // iteration
     input  wire        it_i,
-    output wire        movex_o,    // move x (else y)
-    output wire        neg_o,      // towards minus
-    output wire        outward_o,  // away from the centre
-    output wire        fin_o       // end point reached in the final quadrant
+    output reg         rdy_o,      // the outputs below belong to the current state
+    output reg         movex_o,    // move x (else y)
+    output reg         neg_o,      // towards minus
+    output reg         outward_o,  // away from the centre
+    output reg         fin_o       // end point reached in the final quadrant
 );
 
   /* verilator lint_off UNUSEDPARAM */
@@ -57,9 +60,16 @@ module arc_interp (
   wire upper = q1 || q2;
   wire right = q1 || q4;
   // Allowed moves (towards minus when set), and which of them is outward.
-  wire mxn = upper == ccw;
-  wire myn = right != ccw;
-  wire xo = xz || (xn == mxn);
+  // Registered: the zero tests behind them are deep, and the carry chains
+  // below should start from flip-flops. They belong to the current state
+  // one clock after it last changed (rdy_a).
+  reg mxn, myn, xo, rdy_a;
+  always @(posedge clk) begin
+    mxn   <= upper == ccw;
+    myn   <= right != ccw;
+    xo    <= xz || (xn == (upper == ccw));
+    rdy_a <= !(ld_i || it_i);
+  end
 
   // S = D + mx*x + my*y is D at the corner of the cell both moves border,
   // less 1/2: outward when S < 0. DW+1 bits hold it for any loaded D.
@@ -72,10 +82,19 @@ module arc_interp (
   wire final_q = ncross == nq;
   wire xlock = final_q && x == xe;
   wire ylock = final_q && y == ye;
-  assign movex_o = xlock ? 1'b0 : (ylock ? 1'b1 : (s[DW] == xo));
-  assign neg_o = movex_o ? mxn : myn;
-  assign outward_o = movex_o == xo;
-  assign fin_o = xlock && ylock;
+  wire movex_c = xlock ? 1'b0 : (ylock ? 1'b1 : (s[DW] == xo));
+
+  // The decision is a register too: S's two carry chains and the update's two
+  // would otherwise sit in one path. It belongs to the current state two
+  // clocks after that last changed, so an arc step comes at most every third
+  // clock (4 MHz at 12 MHz), far above any feed a machine uses.
+  always @(posedge clk) begin
+    rdy_o     <= rdy_a && !(ld_i || it_i);
+    movex_o   <= movex_c;
+    neg_o     <= movex_c ? mxn : myn;
+    outward_o <= movex_c == xo;
+    fin_o     <= xlock && ylock;
+  end
 
   // The moving coordinate, its new value, and the change of D:
   // (c + m)^2 - c^2 = 2*m*c + 1.

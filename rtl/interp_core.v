@@ -88,14 +88,15 @@ module interp_core #(
   wire [  31:0] rdata;
   wire          fire;
   wire [   2:0] l_mv, l_neg;
-  wire a_movex, a_neg, a_out, a_fin;
+  wire a_rdy, a_movex, a_neg, a_out, a_fin;
 
   // --- Sequencing -----------------------------------------------------------
   wire running = st == ST_RUN;
   wire is_line = typ == T_LINE;
   wire is_arc = typ == T_ARC;
-  wire fin = n_left == {NW{1'b0}} || (is_arc && a_fin);
-  wire it = running && !fin && pend != 2'd0 && !hold_i && !abort_i;
+  // An arc's decision is registered (arc_interp): valid while a_rdy.
+  wire fin = n_left == {NW{1'b0}} || (is_arc && a_rdy && a_fin);
+  wire it = running && !fin && pend != 2'd0 && !hold_i && !abort_i && (!is_arc || a_rdy);
   wire rd = st == ST_LOAD && widx < NWORDS && !abort_i;
   wire ld = rv && !abort_i;
   // Writer: the first word decides for the whole segment.
@@ -143,6 +144,7 @@ module interp_core #(
       .ld_idx_i (ridx),
       .ld_data_i(rdata),
       .it_i     (it && is_arc),
+      .rdy_o    (a_rdy),
       .movex_o  (a_movex),
       .neg_o    (a_neg),
       .outward_o(a_out),

@@ -49,15 +49,16 @@ module line_interp (
     for (a = 0; a < 3; a = a + 1) begin : g_axis
       reg  [NW-1:0] d;
       reg  [EW-1:0] e;
-      // s = E + 2d, t = s - 2N: an axis steps when t crosses zero; the
-      // comparison is strict for positive axes so ties round the same way
+      // s = E + 2d, t = s - 2N: an axis steps when t >= 0. E starts one
+      // lower for an axis running towards plus, so ties round the same way
       // in absolute coordinates whichever way the line runs.
       wire [  EW:0] s = {1'b0, e} + {1'b0, d, 1'b0};
       wire [EW+1:0] t = {1'b0, s} - {2'b00, n, 1'b0};
-      assign mv_o[a] = neg_o[a] ? !t[EW+1] : (!t[EW+1] && t != {(EW + 2) {1'b0}});
+      wire [EW-1:0] e0 = {1'b0, ld_data_i[NW-1:0]} - {{(EW - 1) {1'b0}}, !neg_o[a]};
+      assign mv_o[a] = !t[EW+1];
 
       always @(posedge clk) begin
-        if (ld_i && ld_idx_i == I_N) e <= {1'b0, ld_data_i[NW-1:0]};
+        if (ld_i && ld_idx_i == I_N) e <= e0;
         else if (it_i) e <= mv_o[a] ? t[EW-1:0] : s[EW-1:0];
         if (ld_i && ld_idx_i == I_A + a[3:0]) d <= ld_data_i[NW-1:0];
       end
