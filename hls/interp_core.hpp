@@ -159,6 +159,17 @@ class InterpCore {
     }
   }
 
+  // Fast-forward: idle with less than a segment queued and no input, the
+  // core settles within two clocks and then stands still; skip(n) is n such
+  // clocks.
+  bool quiet(const InterpIn& in) const {
+    return st_ == ST_IDLE && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr && !in.abort && !in.clr &&
+           !in.set;
+  }
+  void skip(uint32_t n) {
+    for (uint32_t i = 0; i < n && i < 2; ++i) clock(InterpIn{});
+  }
+
   int32_t pos(int a) const { return pos_[a]; }
   bool busy() const { return st_ != ST_IDLE; }
   int state() const { return st_; }

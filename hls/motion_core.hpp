@@ -141,31 +141,22 @@ class MotionCore {
     }
 
     // Drive stage.
-    n.pcnt = in.rst ? 0 : (r_.pcnt + 1) & ((1u << PWM_BITS) - 1);
+    n.pcnt = in.rst ? 0 : (r_.pcnt + 1) & pwm_mask;
     for (int a = 0; a < NAXES; ++a) {
-      const int16_t u_sel = !in.drv_allow[a] ? int16_t(0) : in.drv_ovr[a] ? in.drv_ovr_val[a] : r_.smp_u[a];
+      const int16_t u = u_sel(in, a);
       if (in.rst) {
         n.drv_u[a] = 0;
         n.pwm[a] = n.dir[a] = n.drv_en[a] = false;
       } else {
-        n.drv_u[a] = u_sel;
-        n.pwm[a] = duty(u_sel) > r_.pcnt;
-        n.dir[a] = u_sel < 0;
-        n.drv_en[a] = in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]);
+        n.drv_u[a] = u;
+        n.pwm[a] = duty(u) > r_.pcnt;
+        n.dir[a] = u < 0;
+        n.drv_en[a] = drv_en(in, a);
       }
     }
 
     // Sub-blocks, each on the values of this clock.
-    typename Pid::In pi;
-    pi.rst = in.rst;
-    pi.we = in.pid_we;
-    pi.waddr = in.pid_waddr;
-    pi.wdata = in.pid_wdata;
-    pi.re = in.pid_re;
-    pi.raddr = in.pid_raddr;
-    pi.cmd = cmd;
-    pi.fb = fb;
-    pid_.clock(pi);
+    pid_.clock(pid_in(in, cmd, fb));
 
     InterpIn ii;
     ii.wr = in.seg_wr;
@@ -180,31 +171,82 @@ class MotionCore {
     else
       ip_.clock(ii);
 
-    for (int a = 0; a < NAXES; ++a) {
-      QuadIn qi;
-      qi.rst = in.rst;
-      qi.filt_len = in.enc_filt[a];
-      qi.dir_inv = in.enc_dir_inv[a];
-      qi.idx_clr_en = in.enc_idx_clr_en[a];
-      qi.pos_load = in.enc_pos_load[a];
-      qi.pos_load_val = in.enc_pos_load_val[a];
-      qi.idx_arm = in.enc_idx_arm[a];
-      qi.idx_disarm = in.enc_idx_disarm[a];
-      qi.err_clr = in.enc_err_clr[a];
-      qi.sample = tick;
-      qi.a = in.enc_a[a];
-      qi.b = in.enc_b[a];
-      qi.z = in.enc_z[a];
-      dec_[a].step(qi);
-    }
+    for (int a = 0; a < NAXES; ++a) dec_[a].step(quad_in(in, a, tick));
     r_ = n;
   }
+
+  // Fast-forward for long simulations: true when n clocks with these inputs
+  // would change nothing but counters (no tick or sweep due, decoders
+  // settled, interpolator idle, drive value unchanged); skip(in, n) then does
+  // them at once. The PWM pin ends as the last of those clocks leaves it.
+  bool quiet(const In& in, uint32_t n) const {
+    if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
+    InterpIn ii;
+    ii.wr = in.seg_wr;
+    ii.abort = in.ip_abort;
+    ii.clr = in.ip_clr;
+    ii.set = in.ip_set;
+    if (!ip_.quiet(ii) || !pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
+    for (int a = 0; a < NAXES; ++a) {
+      if (!dec_[a].quiet(quad_in(in, a, false))) return false;
+      if (r_.drv_u[a] != u_sel(in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
+    }
+    return true;
+  }
+  void skip(const In& in, uint32_t n) {
+    pid_.skip(n);
+    ip_.skip(n);
+    for (int a = 0; a < NAXES; ++a) {
+      dec_[a].skip(n);
+      r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
+    }
+    r_.pcnt = (r_.pcnt + n) & pwm_mask;
+    (void)in;
+  }
+  // The PWM counter's value in the current clock.
+  uint32_t pwm_count() const { return r_.pcnt; }
 
   const Pid& pid() const { return pid_; }
   const InterpCore<FIFO_AW>& interp() const { return ip_; }
   const QuadDecoder<FILT_W, 16, 32>& decoder(int a) const { return dec_[a]; }
 
  private:
+  static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
+
+  int16_t u_sel(const In& in, int a) const {
+    return !in.drv_allow[a] ? int16_t(0) : in.drv_ovr[a] ? in.drv_ovr_val[a] : r_.smp_u[a];
+  }
+  bool drv_en(const In& in, int a) const { return in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]); }
+  static typename Pid::In pid_in(const In& in, const int32_t* cmd, const int32_t* fb) {
+    typename Pid::In pi;
+    pi.rst = in.rst;
+    pi.we = in.pid_we;
+    pi.waddr = in.pid_waddr;
+    pi.wdata = in.pid_wdata;
+    pi.re = in.pid_re;
+    pi.raddr = in.pid_raddr;
+    pi.cmd = cmd;
+    pi.fb = fb;
+    return pi;
+  }
+  static QuadIn quad_in(const In& in, int a, bool tick) {
+    QuadIn qi;
+    qi.rst = in.rst;
+    qi.filt_len = in.enc_filt[a];
+    qi.dir_inv = in.enc_dir_inv[a];
+    qi.idx_clr_en = in.enc_idx_clr_en[a];
+    qi.pos_load = in.enc_pos_load[a];
+    qi.pos_load_val = in.enc_pos_load_val[a];
+    qi.idx_arm = in.enc_idx_arm[a];
+    qi.idx_disarm = in.enc_idx_disarm[a];
+    qi.err_clr = in.enc_err_clr[a];
+    qi.sample = tick;
+    qi.a = in.enc_a[a];
+    qi.b = in.enc_b[a];
+    qi.z = in.enc_z[a];
+    return qi;
+  }
+
   struct Regs {
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
     int32_t smp_cmd[NAXES] = {}, smp_fb[NAXES] = {}, smp_err[NAXES] = {};
