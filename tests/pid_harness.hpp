@@ -16,7 +16,7 @@
 
 #include "pid_core.hpp"
 #include "verilated.h"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
 
 namespace mc::test {
 

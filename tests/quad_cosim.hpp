@@ -10,7 +10,7 @@
 
 #include "quad_harness.hpp"
 #include "verilated.h"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
 
 namespace mc::test {
 

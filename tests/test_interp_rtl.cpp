@@ -16,7 +16,7 @@
 #include "interp_bench.hpp"
 #include "interp_core.hpp"
 #include "verilated.h"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
 
 namespace mc::test {
 namespace {

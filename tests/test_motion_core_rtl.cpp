@@ -17,7 +17,8 @@
 #include "Vmotion_core2.h"
 #include "interp_bench.hpp"
 #include "motion_core.hpp"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
+#include "vl_motion.hpp"
 
 namespace mc::test {
 namespace {
@@ -28,12 +29,6 @@ void pins_of(int64_t count, bool& a, bool& b) {
   const int q = int(((count % 4) + 4) % 4);
   a = ka[q];
   b = kb[q];
-}
-
-// Assign to a Verilated port of whatever integer type it has.
-template <typename P, typename V>
-void port(P& p, V v) {
-  p = P(v);
 }
 
 template <typename Model, int N>
@@ -74,53 +69,8 @@ class MotionCosim {
 
  private:
   void drive_inputs() {
-    Model& d = *dut_;
-    d.rst = in_.rst;
-    d.pid_we = in_.pid_we;
-    d.pid_waddr = in_.pid_waddr;
-    d.pid_wdata = in_.pid_wdata;
-    d.pid_re = in_.pid_re;
-    d.pid_raddr = in_.pid_raddr;
-    d.seg_wr = in_.seg_wr;
-    d.seg_wdata = in_.seg_wdata;
-    d.ip_abort = in_.ip_abort;
-    d.ip_hold = in_.ip_hold;
-    d.ip_clr = in_.ip_clr;
-    d.ip_set = in_.ip_set;
-    for (int a = 0; a < 3; ++a) put32(d.ip_set_pos, a, uint32_t(in_.ip_set_pos[a]));
-    uint32_t ea = 0, eb = 0, ez = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0, allow = 0,
-             ovr = 0;
-    uint64_t filt = 0, ovv = 0;
-    for (int a = 0; a < N; ++a) {
-      pins_of(count_[a], in_.enc_a[a], in_.enc_b[a]);
-      ea |= uint32_t(in_.enc_a[a]) << a;
-      eb |= uint32_t(in_.enc_b[a]) << a;
-      ez |= uint32_t(in_.enc_z[a]) << a;
-      filt |= uint64_t(in_.enc_filt[a] & 0xFF) << (8 * a);
-      dinv |= uint32_t(in_.enc_dir_inv[a]) << a;
-      iclr |= uint32_t(in_.enc_idx_clr_en[a]) << a;
-      pl |= uint32_t(in_.enc_pos_load[a]) << a;
-      put32(d.enc_pos_load_val, a, uint32_t(in_.enc_pos_load_val[a]));
-      arm |= uint32_t(in_.enc_idx_arm[a]) << a;
-      dis |= uint32_t(in_.enc_idx_disarm[a]) << a;
-      eclr |= uint32_t(in_.enc_err_clr[a]) << a;
-      allow |= uint32_t(in_.drv_allow[a]) << a;
-      ovr |= uint32_t(in_.drv_ovr[a]) << a;
-      ovv |= uint64_t(uint16_t(in_.drv_ovr_val[a])) << (16 * a);
-    }
-    port(d.enc_a, ea);
-    port(d.enc_b, eb);
-    port(d.enc_z, ez);
-    port(d.enc_filt, filt);
-    port(d.enc_dir_inv, dinv);
-    port(d.enc_idx_clr_en, iclr);
-    port(d.enc_pos_load, pl);
-    port(d.enc_idx_arm, arm);
-    port(d.enc_idx_disarm, dis);
-    port(d.enc_err_clr, eclr);
-    port(d.drv_allow, allow);
-    port(d.drv_ovr, ovr);
-    port(d.drv_ovr_val, ovv);
+    for (int a = 0; a < N; ++a) pins_of(count_[a], in_.enc_a[a], in_.enc_b[a]);
+    sim::apply_inputs<N>(*dut_, in_);
   }
 
   template <typename T>
@@ -132,38 +82,38 @@ class MotionCosim {
   }
 
   void compare(const typename Twin::Out& t) {
-    const Model& d = *dut_;
     if (in_.rst) return;  // the reset cycles bring the random power-up state in
-    check("pid_wready", 0, bool(d.pid_wready), t.pid_wready);
-    check("pid_rready", 0, bool(d.pid_rready), t.pid_rready);
-    check("pid_rvalid", 0, bool(d.pid_rvalid), t.pid_rvalid);
-    if (t.pid_rvalid) check("pid_rdata", 0, uint32_t(d.pid_rdata), t.pid_rdata);
-    check("seg_count", 0, int(d.seg_count), t.seg_count);
-    check("ip_busy", 0, bool(d.ip_busy), t.ip_busy);
-    check("ip_underrun", 0, bool(d.ip_underrun), t.ip_underrun);
-    check("ip_ovf", 0, bool(d.ip_ovf), t.ip_ovf);
-    check("ip_seg_cnt", 0, int(d.ip_seg_cnt), t.ip_seg_cnt);
-    check("tick", 0, bool(d.tick), t.tick);
-    check("done", 0, bool(d.done), t.done);
+    const typename Twin::Out d = sim::read_outputs<N>(*dut_);
+    check("pid_wready", 0, d.pid_wready, t.pid_wready);
+    check("pid_rready", 0, d.pid_rready, t.pid_rready);
+    check("pid_rvalid", 0, d.pid_rvalid, t.pid_rvalid);
+    if (t.pid_rvalid) check("pid_rdata", 0, d.pid_rdata, t.pid_rdata);
+    check("seg_count", 0, d.seg_count, t.seg_count);
+    check("ip_busy", 0, d.ip_busy, t.ip_busy);
+    check("ip_underrun", 0, d.ip_underrun, t.ip_underrun);
+    check("ip_ovf", 0, d.ip_ovf, t.ip_ovf);
+    check("ip_seg_cnt", 0, d.ip_seg_cnt, t.ip_seg_cnt);
+    check("tick", 0, d.tick, t.tick);
+    check("done", 0, d.done, t.done);
     for (int a = 0; a < N; ++a) {
-      check("pwm", a, bool((d.pwm_o >> a) & 1), t.pwm[a]);
-      check("dir", a, bool((d.dir_o >> a) & 1), t.dir[a]);
-      check("drv_en", a, bool((d.drv_en_o >> a) & 1), t.drv_en[a]);
-      check("drv_u", a, int16_t(get_bits(d.drv_u, 16 * a, 16)), t.drv_u[a]);
-      check("smp_cmd", a, int32_t(get_bits(d.smp_cmd, 32 * a, 32)), t.smp_cmd[a]);
-      check("smp_fb", a, int32_t(get_bits(d.smp_fb, 32 * a, 32)), t.smp_fb[a]);
-      check("smp_err", a, int32_t(get_bits(d.smp_err, 32 * a, 32)), t.smp_err[a]);
-      check("smp_u", a, int16_t(get_bits(d.smp_u, 16 * a, 16)), t.smp_u[a]);
-      check("smp_sat", a, bool((d.smp_sat >> a) & 1), t.smp_sat[a]);
-      check("pid_en", a, bool((d.pid_en >> a) & 1), t.pid_en[a]);
-      check("pos", a, int32_t(get_bits(d.pos, 32 * a, 32)), t.pos[a]);
-      check("cmd", a, int32_t(get_bits(d.cmd, 32 * a, 32)), t.cmd[a]);
-      check("enc_err", a, bool((d.enc_err >> a) & 1), t.enc[a].err);
-      check("enc_err_cnt", a, get_bits(d.enc_err_cnt, 16 * a, 16), t.enc[a].err_cnt);
-      check("enc_idx_pos", a, int32_t(get_bits(d.enc_idx_pos, 32 * a, 32)), t.enc[a].idx_pos);
-      check("enc_idx_armed", a, bool((d.enc_idx_armed >> a) & 1), t.enc[a].idx_armed);
-      check("enc_idx_seen", a, bool((d.enc_idx_seen >> a) & 1), t.enc[a].idx_seen);
-      check("enc_vel", a, int32_t(get_bits(d.enc_vel, 32 * a, 32)), t.enc[a].vel);
+      check("pwm", a, d.pwm[a], t.pwm[a]);
+      check("dir", a, d.dir[a], t.dir[a]);
+      check("drv_en", a, d.drv_en[a], t.drv_en[a]);
+      check("drv_u", a, d.drv_u[a], t.drv_u[a]);
+      check("smp_cmd", a, d.smp_cmd[a], t.smp_cmd[a]);
+      check("smp_fb", a, d.smp_fb[a], t.smp_fb[a]);
+      check("smp_err", a, d.smp_err[a], t.smp_err[a]);
+      check("smp_u", a, d.smp_u[a], t.smp_u[a]);
+      check("smp_sat", a, d.smp_sat[a], t.smp_sat[a]);
+      check("pid_en", a, d.pid_en[a], t.pid_en[a]);
+      check("pos", a, d.pos[a], t.pos[a]);
+      check("cmd", a, d.cmd[a], t.cmd[a]);
+      check("enc_err", a, d.enc[a].err, t.enc[a].err);
+      check("enc_err_cnt", a, d.enc[a].err_cnt, t.enc[a].err_cnt);
+      check("enc_idx_pos", a, d.enc[a].idx_pos, t.enc[a].idx_pos);
+      check("enc_idx_armed", a, d.enc[a].idx_armed, t.enc[a].idx_armed);
+      check("enc_idx_seen", a, d.enc[a].idx_seen, t.enc[a].idx_seen);
+      check("enc_vel", a, d.enc[a].vel, t.enc[a].vel);
     }
   }
 

@@ -11,7 +11,7 @@
 #include "Vmul_align.h"
 #include "mc_fixed.hpp"
 #include "verilated.h"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
 
 namespace mc {
 namespace {

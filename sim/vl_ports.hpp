@@ -1,16 +1,19 @@
-// Port access and contexts for Verilated models in the testbenches.
+// Port access for Verilated models: Verilator gives a port of up to 32 bits
+// as an integer, up to 64 as a 64-bit integer and wider ones as a word array;
+// these access bit fields the same way on all.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 
 #include "verilated.h"
 
-namespace mc::test {
+namespace mc::vl {
 
-// Verilator gives a port of up to 32 bits as an integer, up to 64 as a 64-bit
-// integer and wider ones as a word array: access bit fields the same way on all.
+template <typename P, typename V>
+void set(P& p, V v) {
+  p = P(v);
+}
 inline void put32(uint32_t& p, int, uint32_t v) {
   p = v;
 }
@@ -31,13 +34,4 @@ uint32_t get_bits(const VlWide<N>& p, int lsb, int w) {
   return uint32_t((((hi << 32) | lo) >> (lsb % 32)) & ((uint64_t(1) << w) - 1));
 }
 
-// A context whose models power up in random state (randReset(2)), seeded so
-// that a failure reproduces: a missing reset shows as a twin mismatch.
-inline std::unique_ptr<VerilatedContext> random_context(uint32_t seed) {
-  auto ctx = std::make_unique<VerilatedContext>();
-  ctx->randReset(2);
-  ctx->randSeed(int(seed & 0x7fffffff));
-  return ctx;
-}
-
-}  // namespace mc::test
+}  // namespace mc::vl

@@ -1,0 +1,66 @@
+#include "rtl_core.hpp"
+
+#include <verilated_fst_c.h>
+
+#include "Vmotion_core2.h"
+#include "errors.hpp"
+#include "verilated.h"
+#include "vl_motion.hpp"
+
+namespace mc::sim {
+namespace {
+
+class RtlCore final : public CoreModel {
+ public:
+  explicit RtlCore(const std::string& fst_path) : ctx_(std::make_unique<VerilatedContext>()) {
+    dut_ = std::make_unique<Vmotion_core2>(ctx_.get(), "motion_core");
+    if (!fst_path.empty()) {
+      ctx_->traceEverOn(true);
+      fst_ = std::make_unique<VerilatedFstC>();
+      dut_->trace(fst_.get(), 99);
+      fst_->open(fst_path.c_str());
+      if (!fst_->isOpen()) throw mc::host::InputError("cannot write the waveform file '" + fst_path + "'");
+    }
+  }
+  ~RtlCore() override {
+    dut_->final();
+    if (fst_) fst_->close();
+  }
+  RtlCore(const RtlCore&) = delete;
+  RtlCore& operator=(const RtlCore&) = delete;
+
+  CoreOut outputs(const CoreIn& in) override {
+    apply_inputs<kCoreAxes>(*dut_, in);
+    dut_->clk = 0;
+    dut_->eval();
+    return read_outputs<kCoreAxes>(*dut_);
+  }
+  CoreOut cycle(const CoreIn& in) override {
+    const CoreOut o = outputs(in);
+    if (fst_) fst_->dump(2 * clock_);
+    dut_->clk = 1;
+    dut_->eval();
+    if (fst_) fst_->dump(2 * clock_ + 1);
+    ++clock_;
+    pcnt_ = in.rst ? 0 : (pcnt_ + 1) & ((1u << CoreTwin::pwm_bits) - 1);
+    return o;
+  }
+  bool try_skip(const CoreIn&, uint32_t) override { return false; }
+  uint32_t pwm_count() const override { return pcnt_; }
+  const char* name() const override { return "rtl"; }
+
+ private:
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<Vmotion_core2> dut_;
+  std::unique_ptr<VerilatedFstC> fst_;
+  uint64_t clock_ = 0;
+  uint32_t pcnt_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<CoreModel> make_rtl_core(const std::string& fst_path) {
+  return std::make_unique<RtlCore>(fst_path);
+}
+
+}  // namespace mc::sim
