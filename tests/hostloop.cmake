@@ -1,0 +1,5 @@
+# Host-loop platform: the double-precision PID, the jitter recorder and model,
+# the host-loop event model and the benchmark metrics (label: unit).
+
+mc_gtest(test_pid_double unit test_pid_double.cpp)
+target_link_libraries(test_pid_double PRIVATE mc_host)
