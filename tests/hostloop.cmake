@@ -3,3 +3,6 @@
 
 mc_gtest(test_pid_double unit test_pid_double.cpp)
 target_link_libraries(test_pid_double PRIVATE mc_host)
+
+mc_gtest(test_jitter unit test_jitter.cpp)
+target_link_libraries(test_jitter PRIVATE mc_simcore)
