@@ -6,3 +6,9 @@ target_link_libraries(test_pid_double PRIVATE mc_host)
 
 mc_gtest(test_jitter unit test_jitter.cpp)
 target_link_libraries(test_jitter PRIVATE mc_simcore)
+
+mc_gtest(test_host_loop unit test_host_loop.cpp)
+target_link_libraries(test_host_loop PRIVATE mc_simcore)
+
+mc_gtest(test_metrics unit test_metrics.cpp)
+target_link_libraries(test_metrics PRIVATE mc_simcore)
