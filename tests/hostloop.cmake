@@ -12,3 +12,9 @@ target_link_libraries(test_host_loop PRIVATE mc_simcore)
 
 mc_gtest(test_metrics unit test_metrics.cpp)
 target_link_libraries(test_metrics PRIVATE mc_simcore)
+
+# Runs the built binary; records for a fraction of a second per case.
+mc_gtest(test_cli_jitter unit test_cli_jitter.cpp)
+target_link_libraries(test_cli_jitter PRIVATE mc_simcore nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_jitter PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_cli_jitter motionctl)
