@@ -58,6 +58,7 @@ int run(int argc, char** argv) {
 
   mc::host::cli::add_coeffs_command(app);
   mc::host::cli::add_interp_command(app);
+  mc::host::cli::add_jitter_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");

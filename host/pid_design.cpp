@@ -169,4 +169,14 @@ PidDesign design(const PidGains& g) {
   return d;
 }
 
+mc::PidParams core_params(const PidDesign& d, const CoreLimits& lim) {
+  mc::PidParams p;
+  for (const FixedCoef& f : d.fixed) p.word[f.reg] = f.word;
+  p.word[mc::pid_reg::OLIM] = lim.out_limit;
+  p.word[mc::pid_reg::ILIM] = lim.int_limit;
+  p.word[mc::pid_reg::DBAND] = lim.deadband;
+  p.word[mc::pid_reg::ELIM] = lim.err_limit;
+  return p;
+}
+
 }  // namespace mc::host

@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "mc_fixed.hpp"
+#include "pid_core.hpp"
 
 namespace mc::host {
 
@@ -104,5 +105,16 @@ struct PidDesign {
 
 // Validates, designs and quantizes. Throws InputError.
 PidDesign design(const PidGains& g);
+
+// The limit registers of one axis, as written to the core (output units for
+// the limits, counts for deadband and clamp; 0 = no limit, see
+// hls/pid_regs.hpp).
+struct CoreLimits {
+  uint32_t out_limit = 0, int_limit = 0, deadband = 0, err_limit = 0;
+};
+
+// The coefficient RAM of one axis loaded with the design's words and these
+// limits: what a host writes before enabling the axis.
+mc::PidParams core_params(const PidDesign& d, const CoreLimits& lim = {});
 
 }  // namespace mc::host

@@ -441,8 +441,7 @@ TEST(PidDesign, WordsDriveTheTwinAsDesigned) {
       {2, 30, 0.05, 5e-4, 1e-4}, {5, 2000, 0.001, 2e-5, 1e-5}, {0.8, 10, 0.02, 2e-3, 1e-3}};
   for (const PidGains& g : sets) {
     const PidDesign d = design(g);
-    mc::PidParams p;
-    for (const FixedCoef& f : d.fixed) p.word[f.reg] = f.word;
+    const mc::PidParams p = core_params(d);
     mc::PidState st;
     const Realization& r = d.realized;
     std::mt19937_64 rng(11);

@@ -76,8 +76,7 @@ std::vector<double> run_double(const host::TransferFunction& h, const std::vecto
 }
 
 std::vector<int32_t> run_fixed(const host::PidDesign& d, const std::vector<int32_t>& e) {
-  PidParams p;
-  for (const auto& f : d.fixed) p.word[f.reg] = f.word;
+  const PidParams p = host::core_params(d);
   PidState st;
   std::vector<int32_t> u(e.size());
   for (size_t k = 0; k < e.size(); ++k) u[k] = pid_axis_update(p, st, true, e[k], 0).u;
