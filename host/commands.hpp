@@ -12,5 +12,6 @@ namespace mc::host::cli {
 
 void add_coeffs_command(CLI::App& app);
 void add_interp_command(CLI::App& app);
+void add_plant_command(CLI::App& app);
 
 }  // namespace mc::host::cli
