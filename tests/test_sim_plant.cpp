@@ -495,6 +495,24 @@ TEST(SimClosedLoop, DefaultGainsFollowTheDesignRule) {
   EXPECT_NEAR(cfg.pid.kd, kc * tau, 5e-4 * cfg.pid.kd);
   EXPECT_NEAR(cfg.pid.tf_s, 1 / (10 * wc), 5e-4 * cfg.pid.tf_s);
   EXPECT_EQ(cfg.pid.ts_s, 1e-4);
+
+  // The ideal loop of the rule: L(s) = wc (s + wi) / s^2 after the D zero
+  // cancels the mechanical pole, so T(s) = wc (s + wi) / (s^2 + wc s + wc wi).
+  // Its step response, by partial fractions over the (complex) poles.
+  const cplx disc = std::sqrt(cplx(wc * wc - 4 * wc * wi));
+  const cplx p1 = (-wc + disc) / 2.0, p2 = (-wc - disc) / 2.0;
+  const cplx r1 = wc * (p1 + wi) / (p1 * (p1 - p2)), r2 = wc * (p2 + wi) / (p2 * (p2 - p1));
+  double peak = 0, settle = 0;
+  for (int n = 0; n <= 200000; ++n) {
+    const double t = n * 1e-6;
+    const double y = 1 + (r1 * std::exp(p1 * t) + r2 * std::exp(p2 * t)).real();
+    peak = std::max(peak, y);
+    if (std::fabs(y - 1) > 0.02) settle = t;
+  }
+  std::printf("ideal loop of the rule: overshoot %.1f %%, 2 %% settling %.1f ms\n", 100 * (peak - 1),
+              1e3 * settle);
+  EXPECT_NEAR(peak - 1, 0.163, 0.001);
+  EXPECT_NEAR(settle, 0.0285, 0.0005);
 }
 
 TEST(SimClosedLoop, DefaultGainsSettleA1mmStep) {
