@@ -13,5 +13,8 @@ namespace mc::host::cli {
 void add_coeffs_command(CLI::App& app);
 void add_interp_command(CLI::App& app);
 void add_jitter_command(CLI::App& app);
+void add_plant_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
+void add_cosim_command(CLI::App& app);
 
 }  // namespace mc::host::cli

@@ -49,8 +49,8 @@ int fail(const std::string& msg, int code) {
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "MotionCore host tool: design controller coefficients and preview interpolated paths for the FPGA "
-      "motion core.",
+      "MotionCore host tool: design controller coefficients, preview interpolated paths and run the "
+      "axis plant model for the FPGA motion core.",
       "motionctl"};
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
@@ -59,6 +59,9 @@ int run(int argc, char** argv) {
   mc::host::cli::add_coeffs_command(app);
   mc::host::cli::add_interp_command(app);
   mc::host::cli::add_jitter_command(app);
+  mc::host::cli::add_plant_command(app);
+  mc::host::cli::add_cosim_command(app);
+  mc::host::cli::add_bench_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");

@@ -5,16 +5,16 @@ mc_gtest(test_pid_double unit test_pid_double.cpp)
 target_link_libraries(test_pid_double PRIVATE mc_host)
 
 mc_gtest(test_jitter unit test_jitter.cpp)
-target_link_libraries(test_jitter PRIVATE mc_simcore)
+target_link_libraries(test_jitter PRIVATE mc_sim)
 
 mc_gtest(test_host_loop unit test_host_loop.cpp)
-target_link_libraries(test_host_loop PRIVATE mc_simcore)
+target_link_libraries(test_host_loop PRIVATE mc_sim)
 
 mc_gtest(test_metrics unit test_metrics.cpp)
-target_link_libraries(test_metrics PRIVATE mc_simcore)
+target_link_libraries(test_metrics PRIVATE mc_sim)
 
 # Runs the built binary; records for a fraction of a second per case.
 mc_gtest(test_cli_jitter unit test_cli_jitter.cpp)
-target_link_libraries(test_cli_jitter PRIVATE mc_simcore nlohmann_json::nlohmann_json)
+target_link_libraries(test_cli_jitter PRIVATE mc_sim nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_jitter PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_cli_jitter motionctl)

@@ -1,43 +1,14 @@
-# Verilated RTL models and the C/RTL co-simulation tests.
-
-set(MC_RTL_DIR ${CMAKE_SOURCE_DIR}/rtl)
-set(MC_VERILATOR_ARGS -Wall --assert -x-assign unique -x-initial unique -O3)
-
-# mc_verilate(<lib> TOP <module> SOURCES <files...>): a static library holding
-# the Verilated model V<module>.
-# PREFIX overrides the class name, PARAMS adds -G overrides.
-function(mc_verilate lib)
-  cmake_parse_arguments(V "" "TOP;PREFIX" "SOURCES;PARAMS" ${ARGN})
-  if(NOT V_PREFIX)
-    set(V_PREFIX V${V_TOP})
-  endif()
-  add_library(${lib} STATIC)
-  verilate(${lib}
-    SOURCES ${V_SOURCES}
-    TOP_MODULE ${V_TOP}
-    PREFIX ${V_PREFIX}
-    INCLUDE_DIRS ${MC_RTL_DIR}
-    VERILATOR_ARGS ${MC_VERILATOR_ARGS} ${V_PARAMS})
-  # Verilator's runtime and generated code are not held to our warning flags:
-  # consumers see their headers as system headers.
-  target_compile_options(${lib} PRIVATE -w)
-  get_target_property(vdirs ${lib} INTERFACE_INCLUDE_DIRECTORIES)
-  target_include_directories(${lib} SYSTEM INTERFACE ${vdirs})
-endfunction()
+# Verilated RTL models (mc_verilate: cmake/verilate.cmake) and the C/RTL
+# co-simulation tests.
 
 mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vpid_core1 TOP pid_core PREFIX Vpid_core1 PARAMS -GNAXES=1
   SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
-set(MC_INTERP_RTL interp_core.v seg_fifo.v feed_gen.v line_interp.v arc_interp.v)
-list(TRANSFORM MC_INTERP_RTL PREPEND ${MC_RTL_DIR}/)
 mc_verilate(vinterp_core TOP interp_core SOURCES ${MC_INTERP_RTL})
-# The motion datapath: decoders, interpolator, PID and drive together. The
-# two-axis build is the XY table the co-simulation runs.
-set(MC_MOTION_RTL motion_core.v pid_core.v mul_align.v quad_decoder.v ${MC_INTERP_RTL})
-list(TRANSFORM MC_MOTION_RTL PREPEND ${MC_RTL_DIR}/ REGEX "^[^/]")
+# The motion datapath: decoders, interpolator, PID and drive together.
+# (The two-axis build, vmotion_core2, is the co-simulation's: sim/CMakeLists.txt.)
 mc_verilate(vmotion_core TOP motion_core SOURCES ${MC_MOTION_RTL})
-mc_verilate(vmotion_core2 TOP motion_core PREFIX Vmotion_core2 PARAMS -GNAXES=2 SOURCES ${MC_MOTION_RTL})
 mc_verilate(vquad_decoder TOP quad_decoder SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 # Small widths, so that every counter saturates in a short test: the same
 # values as mc::test::QuadSmall (tests/quad_harness.hpp).

@@ -1,0 +1,13 @@
+# Plant models and machine config (sim/), and motionctl plant (label: unit).
+
+mc_gtest(test_sim_plant unit test_sim_plant.cpp)
+target_link_libraries(test_sim_plant PRIVATE mc_sim)
+
+mc_gtest(test_sim_config unit test_sim_config.cpp)
+target_link_libraries(test_sim_config PRIVATE mc_sim)
+
+mc_gtest(test_cli_plant unit test_cli_plant.cpp)
+target_link_libraries(test_cli_plant PRIVATE nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_plant PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>"
+  MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+add_dependencies(test_cli_plant motionctl)

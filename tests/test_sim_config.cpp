@@ -1,0 +1,254 @@
+// The machine config format (sim/machine_config.hpp): the built-in default
+// parses to the cited values with sane units, and every kind of bad input is
+// an error naming the file, the line and the key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "errors.hpp"
+#include "machine_config.hpp"
+
+namespace mc::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<std::string> lines_of(std::string_view text) {
+  std::vector<std::string> v;
+  std::istringstream in{std::string(text)};
+  for (std::string l; std::getline(in, l);) v.push_back(l);
+  return v;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& l : v) s += l + "\n";
+  return s;
+}
+
+// The default text with one key's line in one table replaced (or removed
+// when `line` is empty); returns the 1-based line number it had.
+struct Edit {
+  std::string text;
+  int line;
+};
+Edit edit(const std::string& table, const std::string& key, const std::string& line) {
+  auto v = lines_of(default_machine_toml());
+  size_t i = 0;
+  while (i < v.size() && v[i] != "[" + table + "]") ++i;
+  const int header = int(i) + 1;
+  while (i < v.size() && v[i].rfind(key + " ", 0) != 0) ++i;
+  if (i == v.size()) {
+    ADD_FAILURE() << key << " not in [" << table << "]";
+    return {"", 0};
+  }
+  if (line.empty()) {
+    v.erase(v.begin() + long(i));
+    return {join(v), header};
+  }
+  v[i] = line;
+  return {join(v), int(i) + 1};
+}
+
+Edit insert_after(const std::string& table, const std::string& line) {
+  auto v = lines_of(default_machine_toml());
+  size_t i = 0;
+  while (i < v.size() && v[i] != "[" + table + "]") ++i;
+  v.insert(v.begin() + long(i) + 1, line);
+  return {join(v), int(i) + 2};
+}
+
+// Parses `text` as "test.toml", expects an InputError that starts with
+// "test.toml:<line>: <key>" and mentions `mentions`.
+void expect_error(const Edit& e, const std::string& key, const std::string& mentions) {
+  try {
+    parse_machine(e.text, "test.toml");
+    ADD_FAILURE() << "no error for " << key;
+  } catch (const mc::host::InputError& err) {
+    const std::string msg = err.what();
+    const std::string where = "test.toml:" + std::to_string(e.line) + ": " + key;
+    EXPECT_EQ(msg.rfind(where, 0), 0u) << msg << "\n  want prefix: " << where;
+    EXPECT_NE(msg.find(mentions), std::string::npos) << msg << "\n  want: " << mentions;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+}
+
+TEST(SimConfig, DefaultParsesToTheDatasheetValues) {
+  const MachineConfig m = default_machine();
+  EXPECT_EQ(m.source, "built-in default");
+  EXPECT_EQ(m.clock_hz, 12e6);
+  EXPECT_EQ(m.plant_dt_s, 1e-6);
+  EXPECT_EQ(m.host_period_s, 0.01);
+  EXPECT_EQ(m.host_io_latency_s, 0.001);
+  EXPECT_EQ(m.host_dac_bits, 12);
+  EXPECT_EQ(m.host_dac_range_v, 10);
+  ASSERT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(m.axes[0].name, "x");
+  EXPECT_EQ(m.axes[1].name, "y");
+  for (const AxisConfig& a : m.axes) {
+    // maxon RE 40 148867 (configs/default.toml cites the datasheet lines).
+    EXPECT_EQ(a.motor.r_ohm, 1.13);
+    EXPECT_EQ(a.motor.l_h, 0.33e-3);
+    EXPECT_EQ(a.motor.kt_nm_per_a, 0.0603);
+    EXPECT_NEAR(a.motor.ke_v_s_per_rad, 60 / (2 * kPi * 158), 1e-6);
+    EXPECT_EQ(a.motor.j_kg_m2, 137e-7);
+    EXPECT_NEAR(a.motor.coulomb_nm, 0.0603 * 0.0686, 1e-7);  // Kt * no-load current
+    EXPECT_GE(a.motor.stiction_nm, a.motor.coulomb_nm);
+    EXPECT_EQ(a.drive.kind, DriveConfig::Kind::Pwm);
+    EXPECT_EQ(a.drive.supply_v, 48);
+    EXPECT_EQ(a.drive.pwm_bits, 9);
+    EXPECT_FALSE(a.drive.pwm_switching);
+    EXPECT_EQ(a.drive.dac_bits, 12);
+    EXPECT_EQ(a.encoder_cpr, 2000);
+    EXPECT_EQ(a.lead_m_per_rev, 0.005);
+    EXPECT_EQ(a.pid.ts_s, 1e-4);
+  }
+  // The two axes are identical.
+  EXPECT_EQ(m.axes[0].pid.kp, m.axes[1].pid.kp);
+  EXPECT_EQ(m.axes[0].load_kg, m.axes[1].load_kg);
+}
+
+// Every value in its unit's plausible range for a small servo axis: catches
+// a value typed in the wrong unit (mH for H, gcm^2 for kg m^2, rpm/V for V s/rad).
+TEST(SimConfig, DefaultUnitsAreSane) {
+  for (const AxisConfig& a : default_machine().axes) {
+    const MotorParams& mo = a.motor;
+    EXPECT_GT(mo.r_ohm, 0.05);
+    EXPECT_LT(mo.r_ohm, 50);
+    EXPECT_GT(mo.l_h, 1e-5);
+    EXPECT_LT(mo.l_h, 1e-1);
+    // In SI units the torque and back-EMF constants are the same number.
+    EXPECT_NEAR(mo.ke_v_s_per_rad / mo.kt_nm_per_a, 1, 0.01);
+    EXPECT_GT(mo.j_kg_m2, 1e-7);
+    EXPECT_LT(mo.j_kg_m2, 1e-3);
+    // The datasheet's mechanical time constant, 4.28 ms, within rounding.
+    EXPECT_NEAR(mo.r_ohm * mo.j_kg_m2 / (mo.kt_nm_per_a * mo.ke_v_s_per_rad), 4.28e-3, 0.05e-3);
+    // No-load speed at the supply: 7590 rpm on the datasheet.
+    const double w0 = (a.drive.supply_v - mo.r_ohm * mo.coulomb_nm / mo.kt_nm_per_a) / mo.ke_v_s_per_rad;
+    EXPECT_NEAR(w0 * 60 / (2 * kPi), 7590, 0.01 * 7590);
+    EXPECT_LE(a.max_speed_m_s, w0 / (2 * kPi) / a.gear_ratio * a.lead_m_per_rev);
+    EXPECT_GT(a.lead_m_per_rev, 1e-3);
+    EXPECT_LT(a.lead_m_per_rev, 5e-2);
+    EXPECT_DOUBLE_EQ(a.drive.pwm_hz, 12e6 / 512);
+    // The DAC variant maps +-dac_range_v to +-supply_v.
+    EXPECT_DOUBLE_EQ(a.drive.dac_range_v * a.drive.amp_gain, a.drive.supply_v);
+    EXPECT_DOUBLE_EQ(counts_per_m(a), 400000);
+    EXPECT_NEAR(reflected_inertia_kg_m2(a), a.load_kg * std::pow(0.005 / (2 * kPi), 2), 1e-15);
+    EXPECT_EQ(reflected_torque_nm(a), 0);
+  }
+}
+
+TEST(SimConfig, AxisLookupIsCaseInsensitive) {
+  const MachineConfig m = default_machine();
+  EXPECT_EQ(axis(m, "X").name, "x");
+  EXPECT_EQ(axis(m, "y").name, "y");
+  try {
+    axis(m, "q");
+    ADD_FAILURE();
+  } catch (const mc::host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x, y"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("\"q\""), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimConfig, OptionalZAxis) {
+  std::string text(default_machine_toml());
+  for (const std::string t : {"", ".motor", ".drive", ".pid"}) {
+    const auto from = text.find("[axis.y" + t + "]");
+    const auto to = text.find("\n[", from + 1);
+    std::string block = text.substr(from, to - from);
+    block.replace(0, 7, "[axis.z");
+    text += "\n" + block + "\n";
+  }
+  const MachineConfig m = parse_machine(text, "xyz.toml");
+  ASSERT_EQ(m.axes.size(), 3u);
+  EXPECT_EQ(m.axes[2].name, "z");
+  EXPECT_EQ(axis(m, "Z").motor.r_ohm, 1.13);
+}
+
+TEST(SimConfig, UnknownKeyIsAnError) {
+  expect_error(insert_after("axis.x.motor", "resistnce_ohm = 1.13"), "axis.x.motor.resistnce_ohm",
+               "unknown key; expected one of: resistance_ohm, inductance_h");
+  expect_error(insert_after("machine", "clock_mhz = 12"), "machine.clock_mhz", "unknown key");
+  expect_error(insert_after("axis.y.pid", "kpp = 1"), "axis.y.pid.kpp", "unknown key");
+}
+
+TEST(SimConfig, MissingKeyIsAnError) {
+  expect_error(edit("axis.x.motor", "resistance_ohm", ""), "axis.x.motor.resistance_ohm", "missing key");
+  expect_error(edit("host_loop", "period_s", ""), "host_loop.period_s", "missing key");
+  expect_error(edit("axis.y.drive", "kind", ""), "axis.y.drive.kind", "missing key");
+}
+
+TEST(SimConfig, WrongTypeIsAnError) {
+  expect_error(edit("axis.x.motor", "resistance_ohm", "resistance_ohm = \"1.13\""),
+               "axis.x.motor.resistance_ohm", "wrong type");
+  expect_error(edit("axis.x", "encoder_counts_per_rev", "encoder_counts_per_rev = 2000.5"),
+               "axis.x.encoder_counts_per_rev", "a whole number");
+  expect_error(edit("axis.x.drive", "pwm_switching", "pwm_switching = 1"), "axis.x.drive.pwm_switching",
+               "true or false");
+  expect_error(edit("axis.x.drive", "kind", "kind = \"pmw\""), "axis.x.drive.kind",
+               "one of \"pwm\", \"dac\"");
+}
+
+TEST(SimConfig, OutOfRangeValuesAreErrors) {
+  expect_error(edit("axis.x.motor", "resistance_ohm", "resistance_ohm = -1.13"),
+               "axis.x.motor.resistance_ohm", "= -1.13: expected a number > 0 (ohm)");
+  expect_error(edit("axis.y.motor", "inertia_kg_m2", "inertia_kg_m2 = 0"), "axis.y.motor.inertia_kg_m2",
+               "a number > 0");
+  expect_error(edit("axis.x", "load_kg", "load_kg = -15"), "axis.x.load_kg", "a number >= 0 (kg)");
+  expect_error(edit("axis.x.motor", "stiction_nm", "stiction_nm = 0.001"), "axis.x.motor.stiction_nm",
+               "stiction_nm >= coulomb_nm");
+  expect_error(edit("axis.x.drive", "pwm_bits", "pwm_bits = 16"), "axis.x.drive.pwm_bits", "1..15");
+  expect_error(edit("axis.x.pid", "ki", "ki = -1"), "axis.x.pid.ki", "a number >= 0");
+  expect_error(edit("axis.x.pid", "ts_s", "ts_s = 1.00001e-4"), "axis.x.pid.ts_s",
+               "whole number of core clock");
+  expect_error(edit("axis.x.pid", "out_limit", "out_limit = 40000"), "axis.x.pid.out_limit", "<= 32767");
+  expect_error(edit("machine", "plant_dt_s", "plant_dt_s = nan"), "machine.plant_dt_s", "a number > 0");
+}
+
+TEST(SimConfig, StructureErrors) {
+  const std::string text0(default_machine_toml());
+  expect_error({text0 + "[axis.w]\nlead_m_per_rev = 0.005\n", int(lines_of(text0).size()) + 1}, "axis.w",
+               "unknown axis");
+  // Bad TOML: the parser's line and description.
+  expect_error(edit("axis.x.motor", "inductance_h", "inductance_h = = 1"), "TOML", "expected valid TOML");
+  // A whole axis missing.
+  std::string text(default_machine_toml());
+  const auto from = text.find("[axis.y]");
+  text = text.substr(0, from);
+  try {
+    parse_machine(text, "x_only.toml");
+    ADD_FAILURE();
+  } catch (const mc::host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x_only.toml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("axis.y"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimConfig, LoadFromFile) {
+  const std::string path = ::testing::TempDir() + "mc_sim_config_test.toml";
+  {
+    std::ofstream out(path);
+    out << default_machine_toml();
+  }
+  const MachineConfig m = load_machine(path);
+  EXPECT_EQ(m.source, path);
+  EXPECT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(machine_or_default("").source, "built-in default");
+  std::remove(path.c_str());
+  try {
+    load_machine(path);
+    ADD_FAILURE();
+  } catch (const mc::host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace mc::sim

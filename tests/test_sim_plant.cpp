@@ -1,0 +1,536 @@
+// The DC-motor axis plant (sim/dc_motor.hpp): the exact ZOH discretization
+// against the hand-derived analytic step response, stiction without chatter,
+// the encoder pins through the quad_decoder twin, the drive stages, and the
+// default gains closing a stable loop.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "dc_motor.hpp"
+#include "machine_config.hpp"
+#include "pid_design.hpp"
+#include "quad_decoder.hpp"
+
+namespace mc::sim {
+namespace {
+
+using cplx = std::complex<double>;
+constexpr double kPi = 3.14159265358979323846;
+
+AxisConfig default_x() {
+  return axis(default_machine(), "x");
+}
+
+// A motor whose electromechanical poles are complex (large L, small J), with
+// viscous friction and a load force, so that every input path is exercised.
+AxisConfig complex_pole_axis() {
+  AxisConfig a = default_x();
+  a.motor = MotorParams{1.0, 10e-3, 0.05, 0.05, 1e-5, 1e-5, 2e-3, 3e-3};
+  a.load_kg = 2;
+  a.load_force_n = 2;  // 1.6 mN*m at the shaft: less than stiction, so the load alone cannot move it
+  return a;
+}
+
+// The linear model's response to a voltage step V at t = 0 from rest, derived
+// by hand. With x = [i, w]: x' = A x + g, A = [[-R/L, -Ke/L], [Kt/J, -B/J]],
+// g = [V/L, -tau/J] (tau: the load torque). Steady state (x' = 0):
+//   w_ss = (V - R tau/Kt) / (Ke + R B/Kt),  i_ss = (B w_ss + tau) / Kt,
+// and x(t) = x_ss - e^{At} x_ss with Sylvester's formula for distinct
+// eigenvalues l1, l2 (real or a complex pair):
+//   e^{At} = ((A - l2 I) e^{l1 t} - (A - l1 I) e^{l2 t}) / (l1 - l2).
+// theta is the integral of w: w_ss t - sum_k c_k (e^{lk t} - 1) / lk.
+struct Analytic {
+  double r, l, kt, ke, j, b, tau, v;
+  double i_ss, w_ss;
+  cplx l1, l2;
+  cplx ci1, ci2, cw1, cw2;  // i(t) = i_ss - ci1 e^{l1 t} - ci2 e^{l2 t}, likewise w
+
+  Analytic(const MotorParams& m, double j_total, double tau_load, double volts)
+      : r(m.r_ohm),
+        l(m.l_h),
+        kt(m.kt_nm_per_a),
+        ke(m.ke_v_s_per_rad),
+        j(j_total),
+        b(m.b_nm_s_per_rad),
+        tau(tau_load),
+        v(volts) {
+    w_ss = (v - r * tau / kt) / (ke + r * b / kt);
+    i_ss = (b * w_ss + tau) / kt;
+    const double a11 = -r / l, a12 = -ke / l, a21 = kt / j, a22 = -b / j;
+    const double tr = a11 + a22, det = a11 * a22 - a12 * a21;
+    const cplx disc = std::sqrt(cplx(tr * tr - 4 * det));
+    l1 = (tr + disc) / 2.0;
+    l2 = (tr - disc) / 2.0;
+    // (A - l I) x_ss, first and second rows.
+    const auto row = [&](cplx lam, int k) {
+      return k == 0 ? (a11 - lam) * i_ss + a12 * w_ss : a21 * i_ss + (a22 - lam) * w_ss;
+    };
+    ci1 = row(l2, 0) / (l1 - l2);
+    ci2 = -row(l1, 0) / (l1 - l2);
+    cw1 = row(l2, 1) / (l1 - l2);
+    cw2 = -row(l1, 1) / (l1 - l2);
+  }
+  double current(double t) const { return i_ss - (ci1 * std::exp(l1 * t) + ci2 * std::exp(l2 * t)).real(); }
+  double speed(double t) const { return w_ss - (cw1 * std::exp(l1 * t) + cw2 * std::exp(l2 * t)).real(); }
+  double position(double t) const {
+    return w_ss * t - (cw1 * (std::exp(l1 * t) - 1.0) / l1 + cw2 * (std::exp(l2 * t) - 1.0) / l2).real();
+  }
+};
+
+double rel_err(double got, double want) {
+  return std::fabs(got - want) / std::fabs(want);
+}
+
+void expect_zoh_exact(const AxisConfig& cfg, double dt, bool want_complex) {
+  AxisPlant p(cfg, dt);
+  p.set_friction(false);
+  const double volts = 12;
+  const Analytic an(cfg.motor, p.inertia_kg_m2(), p.load_torque_nm(), volts);
+  ASSERT_EQ(std::fabs(an.l1.imag()) > 0, want_complex) << an.l1;
+  // Checkpoints from 1 ms to 100 ms, each a whole number of steps.
+  std::vector<int64_t> marks;
+  for (double t = 1e-3; t <= 0.1 + 1e-12; t *= 1.25)
+    marks.push_back(std::llround(std::round(t / 1e-4) * 1e-4 / dt));
+  int64_t k = 0;
+  double worst = 0;
+  for (const int64_t m : marks) {
+    for (; k < m; ++k) p.step(volts);
+    const double t = double(k) * dt;
+    ASSERT_NEAR(p.time_s(), t, 1e-12);
+    // Without viscous friction or load the current decays to exactly 0, and
+    // its relative error would measure nothing but that: floor the scale at
+    // 1e-3 of the stall current.
+    const double i_scale = std::max(std::fabs(an.current(t)), 1e-3 * volts / cfg.motor.r_ohm);
+    const double ei = std::fabs(p.current_a() - an.current(t)) / i_scale;
+    const double ew = rel_err(p.speed_rad_s(), an.speed(t));
+    const double et = rel_err(p.position_rad(), an.position(t));
+    EXPECT_LE(ei, 1e-6) << "i at t=" << t << " dt=" << dt;
+    EXPECT_LE(ew, 1e-6) << "w at t=" << t << " dt=" << dt;
+    EXPECT_LE(et, 1e-6) << "theta at t=" << t << " dt=" << dt;
+    worst = std::max({worst, ei, ew, et});
+  }
+  std::printf("dt = %g s: worst relative error vs analytic %.3g over %zu checkpoints\n", dt, worst,
+              marks.size());
+}
+
+TEST(SimPlant, ZohEqualsAnalyticDefaultMotorRealPoles) {
+  for (const double dt : {1e-6, 1e-5, 1e-4}) expect_zoh_exact(default_x(), dt, false);
+}
+
+TEST(SimPlant, ZohEqualsAnalyticComplexPoles) {
+  for (const double dt : {1e-6, 1e-5, 1e-4}) expect_zoh_exact(complex_pole_axis(), dt, true);
+}
+
+TEST(SimPlant, TablePositionAndEncoderQuantization) {
+  const AxisConfig cfg = default_x();
+  AxisPlant p(cfg, 1e-6);
+  for (const double theta : {0.0, 1e-9, -1e-9, 2 * kPi, -2 * kPi * 3.25, 1234.5678}) {
+    p.reset(theta);
+    EXPECT_EQ(p.position_rad(), theta);
+    EXPECT_DOUBLE_EQ(p.position_m(), theta / (2 * kPi) / cfg.gear_ratio * cfg.lead_m_per_rev);
+    EXPECT_EQ(p.encoder_count(), int64_t(std::floor(theta / (2 * kPi) * cfg.encoder_cpr))) << theta;
+  }
+  p.reset(-1e-9);
+  EXPECT_EQ(p.encoder_count(), -1);  // floor, not truncation toward 0
+  EXPECT_DOUBLE_EQ(counts_per_m(cfg), 2000 / 0.005);
+}
+
+// --- Friction ----------------------------------------------------------------
+
+// The steady speed with Coulomb friction tc and load torque tau (moving +):
+// V = R i + Ke w, Kt i = B w + tc + tau  =>  w = (V - R (tc + tau)/Kt) / (Ke + R B/Kt).
+double friction_speed(const MotorParams& m, double tau, double v) {
+  return (v - m.r_ohm * (m.coulomb_nm + tau) / m.kt_nm_per_a) /
+         (m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad / m.kt_nm_per_a);
+}
+
+void run(AxisPlant& p, double v, double seconds, int* sign_flips = nullptr) {
+  const int64_t n = std::llround(seconds / p.dt_s());
+  double last = p.speed_rad_s();
+  for (int64_t k = 0; k < n; ++k) {
+    p.step(v);
+    const double w = p.speed_rad_s();
+    if (sign_flips && ((w > 0 && last < 0) || (w < 0 && last > 0))) ++*sign_flips;
+    if (w != 0) last = w;
+  }
+}
+
+TEST(SimPlant, BelowBreakawayStaysExactlyAtRest) {
+  for (const AxisConfig& cfg : {default_x(), complex_pole_axis()}) {
+    AxisPlant p(cfg, 1e-6);
+    ASSERT_TRUE(p.stuck());
+    const double tau = p.load_torque_nm();
+    // The current settles at V/R: breakaway when Kt V/R - tau > stiction.
+    const double v_break = (cfg.motor.stiction_nm + tau) * cfg.motor.r_ohm / cfg.motor.kt_nm_per_a;
+    const int64_t n = 300000;
+    for (int64_t k = 0; k < n; ++k) {
+      p.step(0.999 * v_break);
+      ASSERT_EQ(p.speed_rad_s(), 0.0) << k;
+      ASSERT_EQ(p.position_rad(), 0.0) << k;
+    }
+    EXPECT_TRUE(p.stuck());
+    EXPECT_NEAR(p.current_a(), 0.999 * v_break / cfg.motor.r_ohm, 1e-9);
+
+    AxisPlant q(cfg, 1e-6);
+    run(q, 1.001 * v_break, 0.3);
+    EXPECT_FALSE(q.stuck());
+    EXPECT_GT(q.speed_rad_s(), 0.0);
+    EXPECT_GT(q.position_rad(), 0.0);
+  }
+}
+
+TEST(SimPlant, SteadySpeedWithFrictionMatchesAnalytic) {
+  for (const AxisConfig& cfg : {default_x(), complex_pole_axis()}) {
+    for (const double v : {2.0, 12.0, 24.0}) {
+      AxisPlant p(cfg, 1e-6);
+      run(p, v, 0.6);
+      const double want = friction_speed(cfg.motor, p.load_torque_nm(), v);
+      EXPECT_LE(rel_err(p.speed_rad_s(), want), 1e-6) << v << " V: " << p.speed_rad_s() << " vs " << want;
+      // The current then supplies exactly the friction and load torque.
+      EXPECT_LE(rel_err(p.current_a(),
+                        (cfg.motor.b_nm_s_per_rad * want + cfg.motor.coulomb_nm + p.load_torque_nm()) /
+                            cfg.motor.kt_nm_per_a),
+                1e-6);
+    }
+  }
+}
+
+// Friction may stop the shaft, never push it through zero speed: every
+// reversal passes through exact rest (w == 0), and the shaft leaves rest only
+// when the driving torque exceeds stiction. The default motor is overdamped
+// and stops without reversing; the complex-pole motor's inductance keeps
+// braking current flowing when it stops, which can legitimately start it
+// backwards a few times before it settles.
+TEST(SimPlant, ComesToRestWithoutChatter) {
+  for (const bool underdamped : {false, true}) {
+    const AxisConfig cfg = underdamped ? complex_pole_axis() : default_x();
+    AxisPlant p(cfg, 1e-6);
+    run(p, 12, 0.2);
+    ASSERT_GT(p.speed_rad_s(), 10.0);
+    int reversals = 0, direct_reversals = 0, stops = 0;
+    double last = p.speed_rad_s();
+    for (int k = 0; k < 500000; ++k) {
+      const double before = p.speed_rad_s();
+      const bool was_stuck = p.stuck();
+      const double drive = p.driving_torque_nm();
+      p.step(0);
+      const double w = p.speed_rad_s();
+      direct_reversals += (before > 0 && w < 0) || (before < 0 && w > 0);
+      stops += !was_stuck && p.stuck();
+      if (was_stuck && w != 0) {
+        EXPECT_GT(std::fabs(drive), cfg.motor.stiction_nm) << k;
+      }
+      if ((w > 0 && last < 0) || (w < 0 && last > 0)) ++reversals;
+      if (w != 0) last = w;
+    }
+    EXPECT_EQ(direct_reversals, 0);
+    if (underdamped) {
+      EXPECT_LE(reversals, 10);
+    } else {
+      EXPECT_EQ(reversals, 0);
+      EXPECT_EQ(stops, 1);
+    }
+    std::printf("%s motor: %d stops, %d reversals before rest\n", underdamped ? "complex-pole" : "default",
+                stops, reversals);
+    ASSERT_TRUE(p.stuck());
+    ASSERT_EQ(p.speed_rad_s(), 0.0);
+    const double rest = p.position_rad();
+    for (int k = 0; k < 200000; ++k) {
+      p.step(0);
+      ASSERT_EQ(p.speed_rad_s(), 0.0) << k;
+      ASSERT_EQ(p.position_rad(), rest) << k;
+    }
+  }
+}
+
+TEST(SimPlant, ReversalCrossesZeroOnce) {
+  AxisPlant p(default_x(), 1e-6);
+  run(p, 12, 0.1);
+  int flips = 0, stuck_steps = 0;
+  double last = p.speed_rad_s();
+  for (int k = 0; k < 200000; ++k) {
+    p.step(-12);
+    const double w = p.speed_rad_s();
+    stuck_steps += p.stuck();
+    if ((w > 0 && last < 0) || (w < 0 && last > 0)) ++flips;
+    if (w != 0) last = w;
+  }
+  EXPECT_EQ(flips, 1);
+  EXPECT_LT(p.speed_rad_s(), 0.0);
+  // -12 V is far beyond breakaway: the shaft rests for a step or two only.
+  EXPECT_LE(stuck_steps, 2);
+}
+
+TEST(SimPlant, FrictionOffIsTheLinearModel) {
+  AxisPlant p(default_x(), 1e-6);
+  p.set_friction(false);
+  EXPECT_FALSE(p.stuck());
+  p.step(0.01);  // far below breakaway: moves anyway
+  EXPECT_GT(p.current_a(), 0.0);
+  for (int k = 0; k < 1000; ++k) p.step(0.01);
+  EXPECT_GT(p.speed_rad_s(), 0.0);
+  p.reset();
+  EXPECT_EQ(p.time_s(), 0.0);
+  EXPECT_EQ(p.speed_rad_s(), 0.0);
+}
+
+// The per-step cost, printed for docs/plant.md; not asserted (speed is never
+// asserted in unit tests).
+TEST(SimPlant, StepCost) {
+  AxisPlant p(default_x(), 1e-6);
+  const int n = 2000000;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < n; ++k) p.step((k / 20000) % 2 ? 12.0 : -12.0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const double ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / n;
+  std::printf("AxisPlant::step with friction: %.1f ns per step (%d steps)\n", ns, n);
+  EXPECT_TRUE(std::isfinite(p.position_rad()));
+}
+
+// --- Encoder pins --------------------------------------------------------------
+
+TEST(SimEncoder, GrayCodeAndIndex) {
+  const QuadPins seq[4] = {
+      {false, false, false}, {true, false, false}, {true, true, false}, {false, true, false}};
+  for (int64_t c = -12; c <= 12; ++c) {
+    const QuadPins p = quadrature_pins(c, 8);
+    const QuadPins& w = seq[((c % 4) + 4) % 4];
+    EXPECT_EQ(p.a, w.a) << c;
+    EXPECT_EQ(p.b, w.b) << c;
+    EXPECT_EQ(p.z, c % 8 == 0) << c;
+    // Neighbouring counts differ in exactly one of A, B.
+    const QuadPins n = quadrature_pins(c + 1, 8);
+    EXPECT_EQ(int(p.a != n.a) + int(p.b != n.b), 1) << c;
+  }
+}
+
+// Feeds pins through the decoder twin; `clocks` per count change.
+class DecoderBench {
+ public:
+  explicit DecoderBench(uint32_t filt_len) { in_.filt_len = filt_len; }
+  void apply(const QuadPins& p, int clocks) {
+    in_.a = p.a;
+    in_.b = p.b;
+    in_.z = p.z;
+    for (int k = 0; k < clocks; ++k) out_ = dec_.step(in_);
+  }
+  const QuadOut& out() const { return out_; }
+
+ private:
+  QuadDecoder<> dec_;
+  QuadIn in_;
+  QuadOut out_;
+};
+
+TEST(SimEncoder, RandomWalkRoundTripsThroughDecoderTwin) {
+  std::mt19937_64 rng(4);
+  for (const uint32_t filt : {0u, 3u}) {
+    DecoderBench bench(filt);
+    int64_t count = 0;
+    // Synchronizer (2) + filter (filt) + output register: settle before reading.
+    const int hold = int(filt) + 4;
+    for (int k = 0; k < 20000; ++k) {
+      count += (rng() & 1) ? 1 : -1;
+      bench.apply(quadrature_pins(count, 2000), hold);
+      ASSERT_EQ(bench.out().pos, count) << "step " << k << " filt " << filt;
+      ASSERT_FALSE(bench.out().err) << k;
+    }
+  }
+}
+
+TEST(SimEncoder, PlantDirectionMatchesDecoder) {
+  for (const double v : {24.0, -24.0}) {
+    AxisPlant p(default_x(), 1e-6);
+    DecoderBench bench(2);
+    const int clocks_per_step = 12;  // 12 MHz core clock, 1 us plant step
+    for (int k = 0; k < 20000; ++k) {
+      p.step(v);
+      bench.apply(quadrature_pins(p.encoder_count(), 2000), clocks_per_step);
+    }
+    bench.apply(quadrature_pins(p.encoder_count(), 2000), 8);
+    EXPECT_EQ(bench.out().pos, p.encoder_count());
+    EXPECT_FALSE(bench.out().err);
+    EXPECT_GT(std::abs(p.encoder_count()), 100);
+    EXPECT_EQ(p.encoder_count() > 0, v > 0);
+  }
+}
+
+// --- Drive stages --------------------------------------------------------------
+
+TEST(SimDrive, PwmQuantizationAndSign) {
+  DriveConfig d = default_x().drive;
+  ASSERT_EQ(d.kind, DriveConfig::Kind::Pwm);
+  ASSERT_EQ(d.pwm_bits, 9);
+  EXPECT_DOUBLE_EQ(d.pwm_hz, 12e6 / 512);
+  const double lsb = d.supply_v / 512;
+  EXPECT_EQ(drive_volts(d, 0), 0.0);
+  EXPECT_EQ(drive_volts(d, 63), 0.0);  // below one PWM count: 63 >> 6 = 0
+  EXPECT_DOUBLE_EQ(drive_volts(d, 64), lsb);
+  EXPECT_DOUBLE_EQ(drive_volts(d, -64), -lsb);
+  EXPECT_DOUBLE_EQ(drive_volts(d, 32767), 511 * lsb);  // a 9-bit counter is never high for all 512
+  EXPECT_DOUBLE_EQ(drive_volts(d, 1 << 20), 511 * lsb);
+  EXPECT_DOUBLE_EQ(drive_volts(d, -(1 << 20)), -511 * lsb);
+  std::mt19937 rng(7);
+  for (int k = 0; k < 10000; ++k) {
+    const int32_t u = int32_t(rng() % 65535) - 32767;
+    const double v = drive_volts(d, u);
+    EXPECT_EQ(pwm_duty(d, u), std::abs(u) / 64);
+    EXPECT_DOUBLE_EQ(v, (u < 0 ? -1 : 1) * (std::abs(u) / 64) * lsb);
+    EXPECT_LE(std::fabs(v - u * d.supply_v / 32768), lsb);
+  }
+}
+
+TEST(SimDrive, DacQuantizationAndSaturation) {
+  DriveConfig d = default_x().drive;
+  d.kind = DriveConfig::Kind::Dac;
+  ASSERT_EQ(d.dac_bits, 12);
+  const double step = 20.0 / 4096;
+  EXPECT_EQ(drive_volts(d, 0), 0.0);
+  EXPECT_EQ(drive_volts(d, 15), 0.0);  // 15 >> 4 = 0
+  EXPECT_DOUBLE_EQ(drive_volts(d, 16), step * d.amp_gain);
+  EXPECT_DOUBLE_EQ(drive_volts(d, -1), -step * d.amp_gain);  // floor: the top bits of a negative word
+  EXPECT_DOUBLE_EQ(drive_volts(d, 32767), 2047 * step * d.amp_gain);
+  EXPECT_DOUBLE_EQ(drive_volts(d, -32767), -2048 * step * d.amp_gain);
+  std::mt19937 rng(8);
+  for (int k = 0; k < 10000; ++k) {
+    const int32_t u = int32_t(rng() % 65535) - 32767;
+    const double dac = drive_volts(d, u) / d.amp_gain;
+    const double code = dac / step;
+    EXPECT_NEAR(code, std::round(code), 1e-9);
+    EXPECT_EQ(int(std::lround(code)), int(std::floor(u / 16.0))) << u;
+  }
+  // A larger amplifier gain saturates at the supply.
+  d.amp_gain = 10;
+  EXPECT_EQ(drive_volts(d, 32767), d.supply_v);
+  EXPECT_EQ(drive_volts(d, -32767), -d.supply_v);
+  EXPECT_DOUBLE_EQ(drive_volts(d, 16 * 100), 100 * step * 10);
+}
+
+TEST(SimDrive, HostDacRoundsAndClamps) {
+  const double step = 20.0 / 4096;
+  EXPECT_EQ(dac_volts(12, 10, 0), 0.0);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, 0.49 * step), 0.0);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, 0.51 * step), step);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, -0.51 * step), -step);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, 3.0), std::round(3.0 / step) * step);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, 50), 10 - step);
+  EXPECT_DOUBLE_EQ(dac_volts(12, 10, -50), -10);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> vd(-9.99, 9.99);
+  for (int k = 0; k < 10000; ++k) {
+    const double v = vd(rng);
+    EXPECT_LE(std::fabs(dac_volts(12, 10, v) - v), step / 2 + 1e-12);
+  }
+}
+
+// --- Closed loop with the default gains ----------------------------------------
+
+// The Tustin PID in double precision, realized as the core realizes it
+// (hls/pid_core.hpp: parallel form, conditional-integration anti-windup).
+class RefPid {
+ public:
+  explicit RefPid(const PidConfig& c)
+      : r_(mc::host::realization({c.kp, c.ki, c.kd, c.tf_s, c.ts_s, c.ff1, c.ff2})), lim_(c.out_limit) {}
+  double step(double e) {
+    const double ic = i_ + r_.ki * (e + e1_);
+    d_ = r_.kd_a * d_ + r_.kd_b * (e - e1_);
+    const double rest = r_.kp * e + d_, v = rest + ic;
+    double in = ic;
+    if (v > lim_) in = std::min(ic, std::max(lim_ - rest, i_));
+    if (v < -lim_) in = std::max(ic, std::min(-lim_ - rest, i_));
+    i_ = in;
+    e1_ = e;
+    return std::clamp(rest + i_, -lim_, lim_);
+  }
+
+ private:
+  mc::host::Realization r_;
+  double lim_, i_ = 0, d_ = 0, e1_ = 0;
+};
+
+struct StepResult {
+  double overshoot, settle_s, final_err_counts;
+};
+
+StepResult closed_loop_step(const AxisConfig& cfg, double step_m) {
+  AxisPlant p(cfg, 1e-6);
+  RefPid pid(cfg.pid);
+  const int64_t target = std::llround(step_m * counts_per_m(cfg));
+  const int per_sample = int(std::lround(cfg.pid.ts_s / p.dt_s()));
+  const double duration = 0.3;
+  double peak = 0, settle = 0;
+  const double band = 0.02 * double(target);
+  for (int k = 0; k * cfg.pid.ts_s < duration; ++k) {
+    const double e = double(target - p.encoder_count());
+    const double u = pid.step(e);
+    const double v = drive_volts(cfg.drive, int32_t(std::lround(u)));
+    for (int s = 0; s < per_sample; ++s) p.step(v);
+    const double pos = double(p.encoder_count());
+    peak = std::max(peak, pos);
+    if (std::fabs(pos - double(target)) > band) settle = p.time_s();
+  }
+  return {(peak - double(target)) / double(target), settle, double(target - p.encoder_count())};
+}
+
+// The default gains are the documented rule applied to the default axis
+// (docs/plant.md), rounded to 4 digits in the file.
+TEST(SimClosedLoop, DefaultGainsFollowTheDesignRule) {
+  const AxisConfig cfg = default_x();
+  const MotorParams& m = cfg.motor;
+  const AxisPlant p(cfg, 1e-6);
+  const double tau =
+      m.r_ohm * p.inertia_kg_m2() / (m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad);
+  // Steady speed per volt, times the drive and encoder gains: counts/s per drive unit.
+  const double k = m.kt_nm_per_a / (m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad) *
+                   cfg.drive.supply_v / 32767 * cfg.encoder_cpr / (2 * kPi);
+  const double wc = 2 * kPi * 50, wi = wc / 3, kc = wc / k;
+  EXPECT_NEAR(cfg.pid.kp, kc * (1 + wi * tau), 5e-4 * cfg.pid.kp);
+  EXPECT_NEAR(cfg.pid.ki, kc * wi, 5e-4 * cfg.pid.ki);
+  EXPECT_NEAR(cfg.pid.kd, kc * tau, 5e-4 * cfg.pid.kd);
+  EXPECT_NEAR(cfg.pid.tf_s, 1 / (10 * wc), 5e-4 * cfg.pid.tf_s);
+  EXPECT_EQ(cfg.pid.ts_s, 1e-4);
+
+  // The ideal loop of the rule: L(s) = wc (s + wi) / s^2 after the D zero
+  // cancels the mechanical pole, so T(s) = wc (s + wi) / (s^2 + wc s + wc wi).
+  // Its step response, by partial fractions over the (complex) poles.
+  const cplx disc = std::sqrt(cplx(wc * wc - 4 * wc * wi));
+  const cplx p1 = (-wc + disc) / 2.0, p2 = (-wc - disc) / 2.0;
+  const cplx r1 = wc * (p1 + wi) / (p1 * (p1 - p2)), r2 = wc * (p2 + wi) / (p2 * (p2 - p1));
+  double peak = 0, settle = 0;
+  for (int n = 0; n <= 200000; ++n) {
+    const double t = n * 1e-6;
+    const double y = 1 + (r1 * std::exp(p1 * t) + r2 * std::exp(p2 * t)).real();
+    peak = std::max(peak, y);
+    if (std::fabs(y - 1) > 0.02) settle = t;
+  }
+  std::printf("ideal loop of the rule: overshoot %.1f %%, 2 %% settling %.1f ms\n", 100 * (peak - 1),
+              1e3 * settle);
+  EXPECT_NEAR(peak - 1, 0.163, 0.001);
+  EXPECT_NEAR(settle, 0.0285, 0.0005);
+}
+
+TEST(SimClosedLoop, DefaultGainsSettleA1mmStep) {
+  for (const char* name : {"x", "y"}) {
+    const AxisConfig cfg = axis(default_machine(), name);
+    const StepResult r = closed_loop_step(cfg, 1e-3);
+    std::printf("axis %s, 1 mm step: overshoot %.1f %%, 2 %% settling %.1f ms, final error %.0f counts\n",
+                name, 100 * r.overshoot, 1e3 * r.settle_s, r.final_err_counts);
+    // docs/plant.md: the ideal loop of the design rule (wc = 2 pi 50 Hz,
+    // wi = wc/3) overshoots 16.3 % and enters the 2 % band at 28.5 ms; the
+    // derivative kick of a 1 mm step saturates the drive for about 1 ms and
+    // stiction ends the approach, which the measured 20.5 % / 42.8 ms show.
+    // The bounds leave room for that and fail on a loop that rings or creeps.
+    EXPECT_LT(r.overshoot, 0.25);
+    EXPECT_LT(r.settle_s, 0.05);
+    EXPECT_LE(std::fabs(r.final_err_counts), 2);
+  }
+}
+
+}  // namespace
+}  // namespace mc::sim
