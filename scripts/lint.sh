@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # make lint: Verilator -Wall on every RTL module, then clang-tidy on the host
-# library, the CLI and the twin (through the translation units that use it).
+# library, the CLI, the plant models and the twin (through the translation units
+# that use it).
 # usage: lint.sh <build-dir>
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -10,7 +11,8 @@ scripts/lint_rtl.sh
 test -f "$build/compile_commands.json" || cmake -S . -B "$build" >/dev/null
 # Generated Verilator sources must exist for the TUs that include them.
 cmake --build "$build" >/dev/null
-files=$(ls host/*.cpp tests/test_pid_twin.cpp tests/test_pid_numerics.cpp tests/test_mul_align_rtl.cpp \
+files=$(ls host/*.cpp sim/*.cpp tests/test_sim_plant.cpp tests/test_sim_config.cpp tests/test_pid_twin.cpp \
+  tests/test_pid_numerics.cpp tests/test_mul_align_rtl.cpp tests/test_cosim.cpp tests/test_motion_core_twin.cpp \
   tests/test_interp_twin.cpp tests/test_interp_rtl.cpp tests/test_motion_core_rtl.cpp \
   tests/test_quad_decoder_twin.cpp tests/test_quad_decoder_rtl.cpp tests/test_quad_rate_rtl.cpp)
 echo "clang-tidy: $(echo "$files" | wc -w) files"

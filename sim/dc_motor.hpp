@@ -24,7 +24,7 @@ namespace mc::sim {
 class AxisPlant {
  public:
   // dt_s: the plant step (MachineConfig::plant_dt_s, 1 us by default).
-  AxisPlant(const AxisConfig& cfg, double dt_s);
+  AxisPlant(const AxisConfig& cfg, double dt_s = 1e-6);
 
   // Advance one dt with the terminal voltage held (ZOH).
   void step(double terminal_volts);

@@ -93,10 +93,12 @@ void expect_zoh_exact(const AxisConfig& cfg, double dt, bool want_complex) {
   const double volts = 12;
   const Analytic an(cfg.motor, p.inertia_kg_m2(), p.load_torque_nm(), volts);
   ASSERT_EQ(std::fabs(an.l1.imag()) > 0, want_complex) << an.l1;
-  // Checkpoints from 1 ms to 100 ms, each a whole number of steps.
+  // Checkpoints from 1 ms to 87 ms, geometric, each a whole number of steps.
   std::vector<int64_t> marks;
-  for (double t = 1e-3; t <= 0.1 + 1e-12; t *= 1.25)
-    marks.push_back(std::llround(std::round(t / 1e-4) * 1e-4 / dt));
+  for (int n = 0; n <= 20; ++n) {
+    const double t = std::round(1e-3 * std::pow(1.25, n) / 1e-4) * 1e-4;  // 1 ms .. 87 ms
+    marks.push_back(std::llround(t / dt));
+  }
   int64_t k = 0;
   double worst = 0;
   for (const int64_t m : marks) {
@@ -381,7 +383,8 @@ TEST(SimDrive, PwmQuantizationAndSign) {
     const int32_t u = int32_t(rng() % 65535) - 32767;
     const double v = drive_volts(d, u);
     EXPECT_EQ(pwm_duty(d, u), std::abs(u) / 64);
-    EXPECT_DOUBLE_EQ(v, (u < 0 ? -1 : 1) * (std::abs(u) / 64) * lsb);
+    const int duty = std::abs(u) / 64;
+    EXPECT_DOUBLE_EQ(v, (u < 0 ? -1 : 1) * duty * lsb);
     EXPECT_LE(std::fabs(v - u * d.supply_v / 32768), lsb);
   }
 }
@@ -490,6 +493,10 @@ TEST(SimClosedLoop, DefaultGainsFollowTheDesignRule) {
   const double k = m.kt_nm_per_a / (m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad) *
                    cfg.drive.supply_v / 32767 * cfg.encoder_cpr / (2 * kPi);
   const double wc = 2 * kPi * 50, wi = wc / 3, kc = wc / k;
+  std::printf(
+      "rule: K = %.4g counts/s per drive unit, tau = %.4g ms, Kc = %.4g -> Kp %.4g Ki %.4g Kd %.4g Tf %.4g "
+      "us\n",
+      k, 1e3 * tau, kc, kc * (1 + wi * tau), kc * wi, kc * tau, 1e6 / (10 * wc));
   EXPECT_NEAR(cfg.pid.kp, kc * (1 + wi * tau), 5e-4 * cfg.pid.kp);
   EXPECT_NEAR(cfg.pid.ki, kc * wi, 5e-4 * cfg.pid.ki);
   EXPECT_NEAR(cfg.pid.kd, kc * tau, 5e-4 * cfg.pid.kd);
