@@ -5,7 +5,7 @@ BUILD_SAN  ?= build-san
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize lint format clean
+.PHONY: all deps configure test test-sanitize bench lint format clean
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -18,6 +18,12 @@ configure:
 
 test: all
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+# The sample-period benchmark: the 10 ms PC loop against the FPGA loop at
+# 10 ms .. its shortest Ts, on the built-in machine (configs/default.toml).
+# Writes $(BUILD)/bench/report.md, results.csv and plots/.
+bench: all
+	$(BUILD)/motionctl bench --out $(BUILD)/bench
 
 # The same C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer.
 # Synthesis tests are skipped: they test the tools' view of the RTL, not our C++.

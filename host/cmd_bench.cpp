@@ -2,8 +2,8 @@
 // platform (the 10 ms PC loop, the FPGA loop at 10 ms down to its shortest
 // Ts) on every scenario under both gain policies, co-simulated; writes
 // report.md, results.csv and plots, and prints the report.
-#include <CLI/CLI.hpp>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <fstream>
@@ -58,7 +58,8 @@ void bench_command(const BenchCli& c) {
   o.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
   o.out_dir = c.out;
   o.quick = c.quick;
-  if (c.engine != "rtl" && c.engine != "twin") throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
+  if (c.engine != "rtl" && c.engine != "twin")
+    throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
   o.engine = c.engine == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
   if (c.policy == "same")
     o.policies = {mc::sim::GainPolicy::Same};
@@ -86,7 +87,7 @@ void bench_command(const BenchCli& c) {
                    {"follow_rms_x_um", x.follow[0].rms * 1e6},
                    {"follow_rms_y_um", x.follow[1].rms * 1e6},
                    {"contour_rms_um", x.contour.rms * 1e6},
-                   {"stable", x.stable},
+                   {"tracking", x.tracking},
                    {"sim_speed", x.sim_s / x.wall_s}});
     std::cout << nlohmann::json{{"runs", j}, {"files", files}}.dump(2) << "\n";
     return;
@@ -99,8 +100,8 @@ void bench_command(const BenchCli& c) {
 }
 
 struct CosimCli {
-  std::string config, jitter, engine = "rtl", policy = "same", platform = "fpga-100us", scenario = "step", trace,
-                                      csv;
+  std::string config, jitter, engine = "rtl", policy = "same", platform = "fpga-100us", scenario = "step",
+                              trace, csv;
   bool quick = false, json = false;
   uint64_t seed = 1;
 };
@@ -111,12 +112,15 @@ void cosim_command(const CosimCli& c) {
   s.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
   s.platform = mc::sim::find_platform(s.machine, c.platform);
   s.scenario = mc::sim::find_scenario(c.scenario, c.quick);
-  if (c.engine != "rtl" && c.engine != "twin") throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
+  if (c.engine != "rtl" && c.engine != "twin")
+    throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
   s.engine = c.engine == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
-  if (c.policy != "same" && c.policy != "tuned") throw InputError("--policy", "'" + c.policy + "'", "same or tuned");
+  if (c.policy != "same" && c.policy != "tuned")
+    throw InputError("--policy", "'" + c.policy + "'", "same or tuned");
   s.policy = c.policy == "same" ? mc::sim::GainPolicy::Same : mc::sim::GainPolicy::Tuned;
   if (!c.trace.empty() && (s.platform.host || s.engine != mc::sim::Engine::Rtl))
-    throw InputError("--trace", "'" + c.trace + "'", "an FPGA platform with --engine rtl (the waveform is the RTL's)");
+    throw InputError("--trace", "'" + c.trace + "'",
+                     "an FPGA platform with --engine rtl (the waveform is the RTL's)");
   s.fst_path = c.trace;
   s.seed = c.seed;
   s.record_dt_s = 1e-5;
@@ -125,19 +129,29 @@ void cosim_command(const CosimCli& c) {
     std::ofstream f(c.csv);
     f << "t_s,cmd_x_m,cmd_y_m,pos_x_m,pos_y_m\n";
     for (size_t i = 0; i < r.t.size(); ++i)
-      f << r.t[i] << ',' << r.cmd_m[0][i] << ',' << r.cmd_m[1][i] << ',' << r.pos_m[0][i] << ',' << r.pos_m[1][i]
-        << '\n';
+      f << r.t[i] << ',' << r.cmd_m[0][i] << ',' << r.cmd_m[1][i] << ',' << r.pos_m[0][i] << ','
+        << r.pos_m[1][i] << '\n';
     if (!f) throw InputError("--csv", "'" + c.csv + "'", "a writable file path");
   }
   const bool step = r.scenario == "step";
   if (c.json) {
-    nlohmann::json j{{"platform", r.platform}, {"scenario", r.scenario}, {"policy", r.policy},
-                     {"engine", r.engine},     {"ts_s", r.gains.ts},     {"kp", r.gains.kp},
-                     {"ki", r.gains.ki},       {"kd", r.gains.kd},       {"tf_s", r.gains.tf},
-                     {"follow_rms_x_um", r.follow[0].rms * 1e6},         {"follow_max_x_um", r.follow[0].max * 1e6},
-                     {"follow_rms_y_um", r.follow[1].rms * 1e6},         {"follow_max_y_um", r.follow[1].max * 1e6},
-                     {"stable", r.stable},     {"samples", r.sample_u[0].size()},
-                     {"sim_s", r.sim_s},       {"wall_s", r.wall_s}};
+    nlohmann::json j{{"platform", r.platform},
+                     {"scenario", r.scenario},
+                     {"policy", r.policy},
+                     {"engine", r.engine},
+                     {"ts_s", r.gains.ts},
+                     {"kp", r.gains.kp},
+                     {"ki", r.gains.ki},
+                     {"kd", r.gains.kd},
+                     {"tf_s", r.gains.tf},
+                     {"follow_rms_x_um", r.follow[0].rms * 1e6},
+                     {"follow_max_x_um", r.follow[0].max * 1e6},
+                     {"follow_rms_y_um", r.follow[1].rms * 1e6},
+                     {"follow_max_y_um", r.follow[1].max * 1e6},
+                     {"tracking", r.tracking},
+                     {"samples", r.sample_u[0].size()},
+                     {"sim_s", r.sim_s},
+                     {"wall_s", r.wall_s}};
     if (step) {
       j["settling_time_s"] = r.step.settling_time;
       j["overshoot_pct"] = r.step.overshoot_pct;
@@ -149,19 +163,21 @@ void cosim_command(const CosimCli& c) {
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::printf("%s on %s, %s gains, %s engine: Ts %.6g s, kp %.6g ki %.6g kd %.6g tf %.6g\n", r.scenario.c_str(),
-              r.platform.c_str(), r.policy.c_str(), r.engine.c_str(), r.gains.ts, r.gains.kp, r.gains.ki,
-              r.gains.kd, r.gains.tf);
-  std::printf("following error x: RMS %.3f um, max %.3f um; y: RMS %.3f um, max %.3f um\n", r.follow[0].rms * 1e6,
-              r.follow[0].max * 1e6, r.follow[1].rms * 1e6, r.follow[1].max * 1e6);
+  std::printf("%s on %s, %s gains, %s engine: Ts %.6g s, kp %.6g ki %.6g kd %.6g tf %.6g\n",
+              r.scenario.c_str(), r.platform.c_str(), r.policy.c_str(), r.engine.c_str(), r.gains.ts,
+              r.gains.kp, r.gains.ki, r.gains.kd, r.gains.tf);
+  std::printf("following error x: RMS %.3f um, max %.3f um; y: RMS %.3f um, max %.3f um\n",
+              r.follow[0].rms * 1e6, r.follow[0].max * 1e6, r.follow[1].rms * 1e6, r.follow[1].max * 1e6);
   if (step)
-    std::printf("step: rise %.3f ms, overshoot %.2f %%, settling (2 %%) %.3f ms, steady-state error %.3f um\n",
-                r.step.rise_time * 1e3, r.step.overshoot_pct, r.step.settling_time * 1e3,
-                r.step.steady_state_error * 1e6);
+    std::printf(
+        "step: rise %.3f ms, overshoot %.2f %%, settling (2 %%) %.3f ms, steady-state error %.3f um\n",
+        r.step.rise_time * 1e3, r.step.overshoot_pct, r.step.settling_time * 1e3,
+        r.step.steady_state_error * 1e6);
   else
     std::printf("contour error: RMS %.3f um, max %.3f um\n", r.contour.rms * 1e6, r.contour.max * 1e6);
   std::printf("%s; %zu controller samples; %.3f s simulated in %.3f s (%.3gx real time)\n",
-              r.stable ? "stable" : "UNSTABLE", r.sample_u[0].size(), r.sim_s, r.wall_s, r.sim_s / r.wall_s);
+              r.tracking ? "tracking at the end" : "NOT TRACKING at the end", r.sample_u[0].size(), r.sim_s,
+              r.wall_s, r.sim_s / r.wall_s);
   if (!c.trace.empty()) std::printf("waveform: %s\n", c.trace.c_str());
 }
 
@@ -175,13 +191,15 @@ void add_cosim_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--scenario", c->scenario, "step, line-45, line-30 or circle")->capture_default_str();
   cmd->add_option("--policy", c->policy, "Gain policy: same or tuned")->capture_default_str();
-  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")->capture_default_str();
+  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
+      ->capture_default_str();
   cmd->add_flag("--quick", c->quick, "The shortened scenario of `bench --quick`");
   cmd->add_option("--seed", c->seed, "Seed of the host loop's jitter draws")->capture_default_str();
   cmd->add_option("--trace", c->trace, "Write the core's waveform (FST, for GTKWave); RTL engine only");
   cmd->add_option("--csv", c->csv, "Write the trace (t, command, position; metres) to this CSV file");
   cmd->add_option("--config", c->config, "Machine TOML (default: the built-in configs/default.toml)");
-  cmd->add_option("--jitter", c->jitter, "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
+  cmd->add_option("--jitter", c->jitter,
+                  "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
   cmd->add_flag("--json", c->json, "Machine-readable output");
   cmd->callback([c] { cosim_command(*c); });
 }
@@ -189,11 +207,13 @@ void add_cosim_command(CLI::App& app) {
 void add_bench_command(CLI::App& app) {
   auto c = std::make_shared<BenchCli>();
   CLI::App* cmd = app.add_subcommand(
-      "bench", "Sample-period benchmark: the 10 ms PC loop against the FPGA loop at 10 ms .. its shortest Ts");
+      "bench",
+      "Sample-period benchmark: the 10 ms PC loop against the FPGA loop at 10 ms .. its shortest Ts");
   cmd->add_option("--out", c->out, "Output directory (report.md, results.csv, plots/, data/)")
       ->capture_default_str();
   cmd->add_flag("--quick", c->quick, "Short scenarios: a smoke run, not for comparison");
-  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")->capture_default_str();
+  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
+      ->capture_default_str();
   cmd->add_option("--policy", c->policy, "Gain policy: same, tuned or both")->capture_default_str();
   cmd->add_option("--platform", c->platforms,
                   "Only these platforms (host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us, fpga-min)");
@@ -201,7 +221,8 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--jobs", c->jobs, "Runs at once (default: the number of CPUs)");
   cmd->add_option("--seed", c->seed, "Seed of the host loop's jitter draws")->capture_default_str();
   cmd->add_option("--config", c->config, "Machine TOML (default: the built-in configs/default.toml)");
-  cmd->add_option("--jitter", c->jitter, "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
+  cmd->add_option("--jitter", c->jitter,
+                  "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
   cmd->add_flag("--no-plots", c->no_plots, "Skip the PNG plots (gnuplot)");
   cmd->add_flag("--json", c->json, "Print the results as JSON instead of the report");
   cmd->callback([c] { bench_command(*c); });

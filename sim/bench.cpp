@@ -30,11 +30,13 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
   std::vector<RunSpec> specs;
   std::vector<Platform> platforms;
   for (const Platform& p : bench_platforms(o.machine))
-    if (o.platforms.empty() || std::count(o.platforms.begin(), o.platforms.end(), p.name)) platforms.push_back(p);
+    if (o.platforms.empty() || std::count(o.platforms.begin(), o.platforms.end(), p.name))
+      platforms.push_back(p);
   for (const std::string& n : o.platforms) find_platform(o.machine, n);  // names checked
   std::vector<Scenario> scenarios;
   for (const Scenario& s : bench_scenarios(o.quick))
-    if (o.scenarios.empty() || std::count(o.scenarios.begin(), o.scenarios.end(), s.name)) scenarios.push_back(s);
+    if (o.scenarios.empty() || std::count(o.scenarios.begin(), o.scenarios.end(), s.name))
+      scenarios.push_back(s);
   for (const std::string& n : o.scenarios) find_scenario(n, o.quick);
   for (const Scenario& s : scenarios)
     for (GainPolicy g : o.policies)
@@ -129,7 +131,9 @@ SC_MODULE(DecoupledCore) {
   uint64_t cycles = 0, quantum = 1200;
   double clock_hz = 12e6;
   SC_HAS_PROCESS(DecoupledCore);
-  explicit DecoupledCore(sc_core::sc_module_name n) : sc_core::sc_module(n) { SC_THREAD(run); }
+  explicit DecoupledCore(sc_core::sc_module_name n) : sc_core::sc_module(n) {
+    SC_THREAD(run);
+  }
   void run() {
     const sc_core::sc_time q(double(quantum) / clock_hz, sc_core::SC_SEC);
     for (;;) {
@@ -242,7 +246,7 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   std::ostringstream csv;
   csv << "platform,scenario,policy,engine,ts_s,kp_per_count,ki_per_count_s,kd_per_count_per_s,tf_s,"
          "follow_rms_x_um,follow_max_x_um,follow_rms_y_um,follow_max_y_um,contour_rms_um,contour_max_um,"
-         "settling_time_s,overshoot_pct,rise_time_s,stable,sim_s,wall_s,sim_speed_x_real_time\n";
+         "settling_time_s,overshoot_pct,rise_time_s,tracking,sim_s,wall_s,sim_speed_x_real_time\n";
   for (const RunResult& r : br.runs) {
     const bool step = r.scenario == "step";
     csv << r.platform << ',' << r.scenario << ',' << r.policy << ',' << r.engine << ',' << r.gains.ts << ','
@@ -253,7 +257,8 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
       csv << ",," << r.step.settling_time << ',' << r.step.overshoot_pct << ',' << r.step.rise_time;
     else
       csv << r.contour.rms * 1e6 << ',' << r.contour.max * 1e6 << ",,,";
-    csv << ',' << (r.stable ? 1 : 0) << ',' << r.sim_s << ',' << r.wall_s << ',' << r.sim_s / r.wall_s << '\n';
+    csv << ',' << (r.tracking ? 1 : 0) << ',' << r.sim_s << ',' << r.wall_s << ',' << r.sim_s / r.wall_s
+        << '\n';
   }
   write_file(dir / "results.csv", csv.str());
   written.push_back((dir / "results.csv").string());
@@ -264,16 +269,19 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     d << "# t_s cmd_x_m cmd_y_m pos_x_m pos_y_m err_x_um err_y_um\n";
     const size_t stride = std::max<size_t>(1, r.t.size() / 20000);
     for (size_t i = 0; i < r.t.size(); i += stride)
-      d << r.t[i] << ' ' << r.cmd_m[0][i] << ' ' << r.cmd_m[1][i] << ' ' << r.pos_m[0][i] << ' ' << r.pos_m[1][i]
-        << ' ' << (r.cmd_m[0][i] - r.pos_m[0][i]) * 1e6 << ' ' << (r.cmd_m[1][i] - r.pos_m[1][i]) * 1e6 << '\n';
+      d << r.t[i] << ' ' << r.cmd_m[0][i] << ' ' << r.cmd_m[1][i] << ' ' << r.pos_m[0][i] << ' '
+        << r.pos_m[1][i] << ' ' << (r.cmd_m[0][i] - r.pos_m[0][i]) * 1e6 << ' '
+        << (r.cmd_m[1][i] - r.pos_m[1][i]) * 1e6 << '\n';
     write_file(dir / "data" / (tag(r) + ".dat"), d.str());
   }
 
   // Grouping for the tables and plots.
   std::vector<std::string> platform_order, scenario_order;
   for (const RunResult& r : br.runs) {
-    if (!std::count(platform_order.begin(), platform_order.end(), r.platform)) platform_order.push_back(r.platform);
-    if (!std::count(scenario_order.begin(), scenario_order.end(), r.scenario)) scenario_order.push_back(r.scenario);
+    if (!std::count(platform_order.begin(), platform_order.end(), r.platform))
+      platform_order.push_back(r.platform);
+    if (!std::count(scenario_order.begin(), scenario_order.end(), r.scenario))
+      scenario_order.push_back(r.scenario);
   }
   std::vector<std::string> all_p;
   for (const Platform& p : bench_platforms(o.machine)) all_p.push_back(p.name);
@@ -291,41 +299,47 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   // report.md
   std::ostringstream md;
   md << "# MotionCore sample-period benchmark\n\n";
-  md << "Machine: " << o.machine.source << " (XY table, " << o.machine.axes[0].name << "/" << o.machine.axes[1].name
-     << "); core clock " << o.machine.clock_hz / 1e6 << " MHz; plant step " << o.machine.plant_dt_s * 1e6
-     << " us. FPGA engine: " << engine_name(o.engine) << ". Host loop: " << o.machine.host_period_s * 1e3
-     << " ms nominal, I/O latency " << o.machine.host_io_latency_s * 1e3 << " ms, " << o.machine.host_dac_bits
+  md << "Machine: " << o.machine.source << " (XY table, " << o.machine.axes[0].name << "/"
+     << o.machine.axes[1].name << "); core clock " << o.machine.clock_hz / 1e6 << " MHz; plant step "
+     << o.machine.plant_dt_s * 1e6 << " us. FPGA engine: " << engine_name(o.engine)
+     << ". Host loop: " << o.machine.host_period_s * 1e3 << " ms nominal, I/O latency "
+     << o.machine.host_io_latency_s * 1e3 << " ms, " << o.machine.host_dac_bits
      << "-bit DAC, wake-up jitter from " << o.jitter.source << ". Seed " << o.seed << "."
      << (o.quick ? " **Quick run: shortened scenarios, not for comparison.**" : "") << "\n\n";
   md << "Scenarios:\n";
   for (const Scenario& s : bench_scenarios(o.quick))
-    if (std::count(scenario_order.begin(), scenario_order.end(), s.name)) md << "- `" << s.name << "`: " << s.describe() << "\n";
+    if (std::count(scenario_order.begin(), scenario_order.end(), s.name))
+      md << "- `" << s.name << "`: " << s.describe() << "\n";
   md << "\nGain policies: `same` = the machine's one continuous PID design (configs: [axis.*.pid]) "
         "discretized at every Ts, the paper's method; `tuned` = per platform, closed-loop poles at a triple "
         "real pole -w with w = min(w0, 1/(4 x loop delay)), where the loop delay is half a sample plus the "
-        "computation or I/O latency (and the mean wake-up lateness for the host). Following error = command - "
+        "computation or I/O latency (and the mean wake-up lateness for the host). Following error = command "
+        "- "
         "actual table position; contour error = distance of the actual point from the ideal line or circle. "
-        "A run is marked unstable when it ends more than a quarter of the move off its command.\n\n";
+        "`tracking` = the run ends within a quarter of the move of its command (no: it oscillates, diverged "
+        "or "
+        "has not caught up yet; the plots tell which).\n\n";
   for (const std::string& s : scenario_order) {
     for (const char* pol : policies) {
       md << "## " << s << ", " << pol << " gains\n\n";
       if (s == "step")
         md << "| platform | Ts | RMS follow x (um) | max follow x (um) | settling 2% (ms) | overshoot (%) | "
-              "stable |\n|---|---|---|---|---|---|---|\n";
+              "tracking |\n|---|---|---|---|---|---|---|\n";
       else
-        md << "| platform | Ts | RMS contour (um) | max contour (um) | RMS follow x (um) | RMS follow y (um) | "
-              "max follow (um) | stable |\n|---|---|---|---|---|---|---|---|\n";
+        md << "| platform | Ts | RMS contour (um) | max contour (um) | RMS follow x (um) | RMS follow y (um) "
+              "| "
+              "max follow (um) | tracking |\n|---|---|---|---|---|---|---|---|\n";
       for (const std::string& p : platform_order) {
         const RunResult* r = find(p, s, pol);
         if (!r) continue;
         md << "| " << p << " | " << fmt(r->gains.ts * 1e6, 2) << " us | ";
         if (s == "step")
-          md << um(r->follow[0].rms) << " | " << um(r->follow[0].max) << " | " << ms(r->step.settling_time) << " | "
-             << fmt(r->step.overshoot_pct, 1) << " | ";
+          md << um(r->follow[0].rms) << " | " << um(r->follow[0].max) << " | " << ms(r->step.settling_time)
+             << " | " << fmt(r->step.overshoot_pct, 1) << " | ";
         else
           md << um(r->contour.rms) << " | " << um(r->contour.max) << " | " << um(r->follow[0].rms) << " | "
              << um(r->follow[1].rms) << " | " << um(std::max(r->follow[0].max, r->follow[1].max)) << " | ";
-        md << (r->stable ? "yes" : "**no**") << " |\n";
+        md << (r->tracking ? "yes" : "**no**") << " |\n";
       }
       md << "\n";
     }
@@ -342,25 +356,31 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
       const char* what = s == "step" ? "RMS following error" : "RMS contour error";
       if (host && f10)
         md << "- " << s << ", " << pol << ": " << what << " " << um(err(host)) << " um on the 10 ms host loop"
-           << (host->stable ? "" : " (unstable)") << " against " << um(err(f10)) << " um on the FPGA at the same Ts"
-           << (f10->stable ? "" : " (unstable)");
+           << (host->tracking ? "" : " (off the command at the end)") << " against " << um(err(f10))
+           << " um on the FPGA at the same Ts" << (f10->tracking ? "" : " (off the command at the end)");
       else if (f10)
         md << "- " << s << ", " << pol << ": " << what << " " << um(err(f10)) << " um at fpga-10ms";
       else
         continue;
       if (f100) md << ", " << um(err(f100)) << " um at 100 us";
-      if (fmin) md << " and " << um(err(fmin)) << " um at the shortest Ts (" << fmt(fmin->gains.ts * 1e6, 2) << " us)";
+      if (fmin)
+        md << " and " << um(err(fmin)) << " um at the shortest Ts (" << fmt(fmin->gains.ts * 1e6, 2)
+           << " us)";
       md << ".\n";
     }
   }
   md << "\nWhat the numbers mean: at the same Ts the FPGA loop differs from the PC loop only by the PC's "
-        "jitter, its I/O latency and its DAC; shortening Ts removes the sample-and-hold delay, which lets the "
-        "tuned policy raise the loop bandwidth until the plant's own design bandwidth (w0) is reached, so the "
-        "error stops falling below a few hundred microseconds. With the same gains at every Ts, a design made "
+        "jitter, its I/O latency and its DAC; shortening Ts removes the sample-and-hold delay, which lets "
+        "the "
+        "tuned policy raise the loop bandwidth until the plant's own design bandwidth (w0) is reached, so "
+        "the "
+        "error stops falling below a few hundred microseconds. With the same gains at every Ts, a design "
+        "made "
         "for a fast loop can be unstable at 10 ms.\n\n";
 
   // Speed.
-  md << "## Simulation speed\n\n| platform | engine | simulated s | wall s | x real time |\n|---|---|---|---|---|\n";
+  md << "## Simulation speed\n\n| platform | engine | simulated s | wall s | x real time "
+        "|\n|---|---|---|---|---|\n";
   std::map<std::string, std::pair<double, double>> speed;
   for (const RunResult& r : br.runs) {
     auto& e = speed[r.platform + " | " + r.engine];
@@ -370,14 +390,15 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   for (const std::string& p : platform_order)
     for (const auto& [k, v] : speed)
       if (k.rfind(p + " |", 0) == 0)
-        md << "| " << k << " | " << fmt(v.first, 2) << " | " << fmt(v.second, 2) << " | " << fmt(v.first / v.second, 3)
-           << " |\n";
+        md << "| " << k << " | " << fmt(v.first, 2) << " | " << fmt(v.second, 2) << " | "
+           << fmt(v.first / v.second, 3) << " |\n";
   md << "\nGoals: the RTL co-simulation of the two-axis loop at the " << o.machine.clock_hz / 1e6
      << " MHz core clock at least 1x real time on one core; the twin-only path at least 100x. "
         "`motionctl bench --engine twin` runs the twin path. The whole benchmark took "
      << fmt(br.wall_s, 1) << " s of wall time with " << o.jobs << " jobs.\n\n";
   if (br.probe.probe_sim_s > 0)
-    md << "SystemC kernel choice (probe of " << br.probe.probe_sim_s * 1e3 << " ms of core time, no plant): the "
+    md << "SystemC kernel choice (probe of " << br.probe.probe_sim_s * 1e3
+       << " ms of core time, no plant): the "
        << "Verilated core as a module clocked by an sc_clock runs at " << fmt(br.probe.clocked_speed, 4)
        << "x real time; stepped inside one process that synchronizes every 100 us (temporal decoupling) at "
        << fmt(br.probe.decoupled_speed, 4) << "x. The co-simulation uses the second (docs/decisions.md).\n\n";
@@ -421,7 +442,8 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
          << "rad(x,y) = sqrt((x-cx)**2 + y**2)\n"
          << "mx(x,y) = (cx + (x-cx) * (R + M*(rad(x,y)-R)) / rad(x,y)) * 1e3\n"
          << "my(x,y) = (y * (R + M*(rad(x,y)-R)) / rad(x,y)) * 1e3\nplot ";
-      gp << "'" << dat(*find(platform_order.front(), "circle", pol)) << "' using (mx($2,$3)):(my($2,$3)) with lines lw 2 "
+      gp << "'" << dat(*find(platform_order.front(), "circle", pol))
+         << "' using (mx($2,$3)):(my($2,$3)) with lines lw 2 "
          << "dt 2 title 'command'";
       for (const std::string& p : platform_order) {
         const RunResult* r = find(p, "circle", pol);
@@ -444,22 +466,24 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     std::ostringstream d;
     d << "# policy scenario platform ts_s rms_um host\n";
     for (const RunResult* r : rows)
-      d << r->policy << ' ' << r->scenario << ' ' << r->platform << ' ' << r->gains.ts << ' ' << r->contour.rms * 1e6
-        << ' ' << (r->platform.rfind("host", 0) == 0 ? 1 : 0) << '\n';
+      d << r->policy << ' ' << r->scenario << ' ' << r->platform << ' ' << r->gains.ts << ' '
+        << r->contour.rms * 1e6 << ' ' << (r->platform.rfind("host", 0) == 0 ? 1 : 0) << '\n';
     write_file(dir / "data" / "contour_vs_ts.dat", d.str());
     const fs::path png = dir / "plots" / "contour_vs_ts.png";
     std::ostringstream gp;
     gp << "set terminal pngcairo size 1000,600\nset output '" << png.string() << "'\nset logscale xy\n"
-       << "set title 'RMS contour error against sample period'\nset xlabel 'Ts (s)'\nset ylabel 'RMS contour error (um)'\n"
-       << "set grid\nset key outside right\nf = '" << (dir / "data" / "contour_vs_ts.dat").string() << "'\nplot ";
+       << "set title 'RMS contour error against sample period'\nset xlabel 'Ts (s)'\nset ylabel 'RMS contour "
+          "error (um)'\n"
+       << "set grid\nset key outside right\nf = '" << (dir / "data" / "contour_vs_ts.dat").string()
+       << "'\nplot ";
     bool first = true;
     for (const char* pol : policies)
       for (const std::string& s : scenario_order) {
         if (s == "step") continue;
         const std::string sel = "(strcol(1) eq '" + std::string(pol) + "' && strcol(2) eq '" + s + "'";
-        gp << (first ? "" : ", ") << "f using " << sel << " && $6 == 0 ? $4 : NaN):5 with linespoints title 'FPGA "
-           << s << " " << pol << "', f using " << sel << " && $6 == 1 ? $4 : NaN):5 with points pt 7 ps 2 title 'host "
-           << s << " " << pol << "'";
+        gp << (first ? "" : ", ") << "f using " << sel
+           << " && $6 == 0 ? $4 : NaN):5 with linespoints title 'FPGA " << s << " " << pol << "', f using "
+           << sel << " && $6 == 1 ? $4 : NaN):5 with points pt 7 ps 2 title 'host " << s << " " << pol << "'";
         first = false;
       }
     gp << "\n";

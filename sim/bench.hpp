@@ -26,8 +26,8 @@ struct BenchOptions {
 };
 
 struct KernelProbe {
-  double clocked_speed = 0;     // simulated s per wall s, core as an sc_clock-driven module
-  double decoupled_speed = 0;   // the same core, stepped in a decoupled process
+  double clocked_speed = 0;    // simulated s per wall s, core as an sc_clock-driven module
+  double decoupled_speed = 0;  // the same core, stepped in a decoupled process
   double probe_sim_s = 0;
 };
 

@@ -60,12 +60,9 @@ double fpga_min_ts(const MachineConfig& m) {
 }
 
 std::vector<Platform> bench_platforms(const MachineConfig& m) {
-  return {{"host-10ms", true, m.host_period_s},
-          {"fpga-10ms", false, 10e-3},
-          {"fpga-1ms", false, 1e-3},
-          {"fpga-100us", false, 100e-6},
-          {"fpga-10us", false, 10e-6},
-          {"fpga-min", false, fpga_min_ts(m)}};
+  return {
+      {"host-10ms", true, m.host_period_s}, {"fpga-10ms", false, 10e-3}, {"fpga-1ms", false, 1e-3},
+      {"fpga-100us", false, 100e-6},        {"fpga-10us", false, 10e-6}, {"fpga-min", false, fpga_min_ts(m)}};
 }
 
 Platform find_platform(const MachineConfig& m, const std::string& name) {
@@ -147,8 +144,8 @@ mc::host::PidGains tuned_gains(const MachineConfig&, const AxisConfig& a, double
   return out;
 }
 
-mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p, GainPolicy policy,
-                             const JitterHistogram& jitter) {
+mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p,
+                             GainPolicy policy, const JitterHistogram& jitter) {
   const double ts = p.host ? p.ts_s : ts_cycles(m, p.ts_s) / m.clock_hz;
   if (policy == GainPolicy::Tuned) return tuned_gains(m, a, ts, loop_delay_s(m, p, jitter));
   mc::host::PidGains g{};
@@ -190,8 +187,8 @@ Command make_command(const MachineConfig& m, const Scenario& s) {
   mc::host::PlannedSegment p;
   if (s.kind == ScenarioKind::Line) {
     const double a = s.angle_deg * M_PI / 180;
-    const mc::host::Vec3 to{std::llround(s.size_m * std::cos(a) * cpm), std::llround(s.size_m * std::sin(a) * cpm),
-                            0};
+    const mc::host::Vec3 to{std::llround(s.size_m * std::cos(a) * cpm),
+                            std::llround(s.size_m * std::sin(a) * cpm), 0};
     p = mc::host::plan_line(origin, to, feed, m.clock_hz);
     c.ideal.push_back(Segment{{0, 0}, {double(to[0]) / cpm, double(to[1]) / cpm}});
   } else {
@@ -261,9 +258,7 @@ class Machine {
   double dt() const { return s_.machine.plant_dt_s; }
   bool host() const { return s_.platform.host; }
   // The plant step at or after which the PC next wakes.
-  uint64_t next_wake_step() const {
-    return uint64_t(std::ceil(host_[0].next_wake_s() / dt() - 1e-9));
-  }
+  uint64_t next_wake_step() const { return uint64_t(std::ceil(host_[0].next_wake_s() / dt() - 1e-9)); }
   // The PC wakes: it reads the command and the encoders as they are now.
   void host_wake() {
     for (int a = 0; a < kCoreAxes; ++a) {
@@ -284,7 +279,8 @@ class Machine {
     res_.wall_s = wall_s;
     const double cpm = counts_per_m(s_.machine.axes[0]);
     (void)cpm;
-    for (int a = 0; a < kCoreAxes; ++a) res_.follow[size_t(a)] = following_error(res_.t, res_.cmd_m[size_t(a)], res_.pos_m[size_t(a)]);
+    for (int a = 0; a < kCoreAxes; ++a)
+      res_.follow[size_t(a)] = following_error(res_.t, res_.cmd_m[size_t(a)], res_.pos_m[size_t(a)]);
     const Scenario& sc = s_.scenario;
     if (sc.kind == ScenarioKind::Step) {
       res_.step = step_metrics(res_.t, res_.pos_m[0], sc.size_m);
@@ -293,13 +289,13 @@ class Machine {
       for (size_t i = 0; i < pts.size(); ++i) pts[i] = {res_.pos_m[0][i], res_.pos_m[1][i]};
       res_.contour = contour_error(pts, cmd_.ideal);
     }
-    // Diverged or oscillating: still far off the command at the end.
+    // Still far off the command at the end: oscillating, diverged, or slow.
     const size_t n = res_.t.size(), from = n - std::max<size_t>(1, n / 10);
     double worst = 0;
     for (size_t i = from; i < n; ++i)
       for (int a = 0; a < kCoreAxes; ++a)
         worst = std::max(worst, std::fabs(res_.cmd_m[size_t(a)][i] - res_.pos_m[size_t(a)][i]));
-    res_.stable = worst < 0.25 * sc.size_m;
+    res_.tracking = worst < 0.25 * sc.size_m;
     return std::move(res_);
   }
 
@@ -319,7 +315,8 @@ class Machine {
       for (int r = 0; r < mc::pid_reg::NREGS_RAM; ++r) w.push_back({uint8_t(a << 4 | r), p.word[r]});
       w.push_back({uint8_t(a << 4 | mc::pid_reg::CTRL), 1});
     }
-    w.push_back({uint8_t(mc::pid_reg::GLOBAL_AXIS << 4 | mc::pid_reg::G_TS), ts_cycles(s_.machine, s_.platform.ts_s)});
+    w.push_back({uint8_t(mc::pid_reg::GLOBAL_AXIS << 4 | mc::pid_reg::G_TS),
+                 ts_cycles(s_.machine, s_.platform.ts_s)});
     for (const auto& [addr, data] : w) {
       in.pid_we = true;
       in.pid_waddr = addr;
@@ -514,7 +511,7 @@ SC_MODULE(SystemModel) {
   sc_core::sc_event wake_ev, woke_ev;
 
   SC_HAS_PROCESS(SystemModel);
-  SystemModel(sc_core::sc_module_name nm, Machine& machine, const RunSpec& s)
+  SystemModel(sc_core::sc_module_name nm, Machine & machine, const RunSpec& s)
       : sc_core::sc_module(nm), m(machine), spec(s) {
     quantum = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 / m.dt())));
     SC_THREAD(machine_proc);
@@ -522,7 +519,9 @@ SC_MODULE(SystemModel) {
     if (spec.progress) SC_THREAD(monitor_proc);
   }
 
-  sc_core::sc_time at_step(uint64_t s) const { return sc_core::sc_time(double(s) * m.dt(), sc_core::SC_SEC); }
+  sc_core::sc_time at_step(uint64_t s) const {
+    return sc_core::sc_time(double(s) * m.dt(), sc_core::SC_SEC);
+  }
 
   void machine_proc() {
     while (m.step_index() < m.end_step()) {
@@ -620,7 +619,7 @@ void fields(IO& io, R& r) {
   io.vec(r.sample_clock);
   io.pod(r.contour);
   io.pod(r.step);
-  io.pod(r.stable);
+  io.pod(r.tracking);
   io.pod(r.sim_s);
   io.pod(r.wall_s);
   io.pod(r.clocks_cycled);

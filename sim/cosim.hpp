@@ -29,7 +29,7 @@ enum class Engine { Rtl, Twin };
 const char* engine_name(Engine e);
 
 struct Platform {
-  std::string name;  // "host-10ms", "fpga-100us", ...
+  std::string name;   // "host-10ms", "fpga-100us", ...
   bool host = false;  // the PC loop instead of the FPGA core
   double ts_s = 0;    // sample period (the FPGA's is a whole number of clocks)
 };
@@ -43,9 +43,9 @@ enum class ScenarioKind { Step, Line, Circle };
 struct Scenario {
   std::string name;
   ScenarioKind kind = ScenarioKind::Step;
-  double size_m = 0;     // step size, line length or circle radius
-  double angle_deg = 0;  // line direction from +x
-  double feed_m_s = 0;   // path speed (lines, circle)
+  double size_m = 0;      // step size, line length or circle radius
+  double angle_deg = 0;   // line direction from +x
+  double feed_m_s = 0;    // path speed (lines, circle)
   double duration_s = 0;  // simulated time after the command starts
   std::string describe() const;
 };
@@ -68,8 +68,8 @@ double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHisto
 // w = min(w0, 1 / (4 delay)): the loop keeps about 14 degrees of phase for
 // its delay. w0 comes from the machine's gains: for this rule Ki/Kp = w/3.
 mc::host::PidGains tuned_gains(const MachineConfig& m, const AxisConfig& a, double ts_s, double delay_s);
-mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p, GainPolicy policy,
-                             const JitterHistogram& jitter);
+mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p,
+                             GainPolicy policy, const JitterHistogram& jitter);
 // The linearized axis: Kg in counts/s per drive unit, tau in s.
 struct AxisModel {
   double kg, tau;
@@ -83,9 +83,9 @@ struct RunSpec {
   GainPolicy policy = GainPolicy::Same;
   Engine engine = Engine::Rtl;
   uint64_t seed = 1;
-  std::string fst_path;     // waveform of the core (RTL engine only)
-  double record_dt_s = 1e-4;  // trace interval
-  JitterHistogram jitter;   // the PC's wake-up lateness
+  std::string fst_path;                  // waveform of the core (RTL engine only)
+  double record_dt_s = 1e-4;             // trace interval
+  JitterHistogram jitter;                // the PC's wake-up lateness
   std::function<void(double)> progress;  // fraction done, now and then
 };
 
@@ -101,7 +101,7 @@ struct RunResult {
   std::array<ErrorStats, 2> follow;  // m
   ErrorStats contour;                // m, paths only
   StepMetrics step{};                // step only, axis x
-  bool stable = true;
+  bool tracking = true;              // within a quarter of the move of the command at the end
   double sim_s = 0, wall_s = 0;
   uint64_t clocks_cycled = 0, clocks_skipped = 0;
 };

@@ -19,7 +19,8 @@ class RtlCore final : public CoreModel {
       fst_ = std::make_unique<VerilatedFstC>();
       dut_->trace(fst_.get(), 99);
       fst_->open(fst_path.c_str());
-      if (!fst_->isOpen()) throw mc::host::InputError("--trace", "'" + fst_path + "'", "a writable file path");
+      if (!fst_->isOpen())
+        throw mc::host::InputError("--trace", "'" + fst_path + "'", "a writable file path");
     }
   }
   ~RtlCore() override {

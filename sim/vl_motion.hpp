@@ -10,7 +10,6 @@
 
 namespace mc::sim {
 
-
 // Present the inputs of one clock to the model (clk untouched).
 template <int N, typename Model>
 void apply_inputs(Model& d, const MotionIn<N>& in) {
