@@ -203,4 +203,87 @@ class PidCore {
   uint32_t ts_ = latency;
 };
 
+// pid_core clock by clock: the RTL's control timing (the state clearing after
+// reset, the sample timer, the sweep, the configuration handshake) around the
+// sample-level arithmetic of PidCore. Outputs are those of the current clock,
+// before its edge; clock() is the edge. The arithmetic of a sample is done at
+// its tick; the RTL publishes it over the sweep and done() marks the clock in
+// which all of it is out, which is when a user of u()/err()/sat() reads it.
+// ceil(log2(v)), as Verilog's $clog2.
+constexpr int clog2(int v) {
+  return v <= 1 ? 0 : 1 + clog2((v + 1) / 2);
+}
+
+template <int NAXES>
+class PidCoreClocked {
+ public:
+  static constexpr int latency = PidCore<NAXES>::latency;
+  // State RAM depth: clog2(NAXES + 1) slot bits + 3 word bits (rtl/pid_core.v).
+  static constexpr int clear_cycles = 8 << clog2(NAXES + 1);
+
+  struct In {
+    bool rst = false;
+    bool we = false;
+    uint8_t waddr = 0;
+    uint32_t wdata = 0;
+    bool re = false;
+    uint8_t raddr = 0;
+    const int32_t* cmd = nullptr;  // NAXES values, read at a tick only
+    const int32_t* fb = nullptr;
+  };
+
+  bool tick() const { return tick_; }
+  bool done() const { return done_; }
+  bool busy() const { return run_ || clr_; }
+  bool wready() const { return !busy(); }
+  bool rready(bool we) const { return !busy() && !we; }
+  bool rvalid() const { return rvalid_; }
+  uint32_t rdata() const { return rdata_; }
+  bool enabled(int a) const { return core_.read(uint8_t(a << 4 | pid_reg::CTRL)) & 1; }
+  const PidCore<NAXES>& core() const { return core_; }
+
+  void clock(const In& in) {
+    if (in.rst) {
+      core_.reset();
+      clr_ = true;
+      cc_ = 0;
+      tcnt_ = 1;
+      tick_ = run_ = done_ = rvalid_ = false;
+      left_ = 0;
+      return;
+    }
+    // Configuration lands before a sample taken in the same clock; a new Ts
+    // waits for the next reload.
+    const uint32_t ts = core_.ts_cycles();
+    const bool idle = !busy();
+    if (in.we && idle) core_.write(in.waddr, in.wdata);
+    rvalid_ = in.re && idle && !in.we;
+    if (rvalid_) rdata_ = core_.read(in.raddr);
+    if (tick_) core_.sample(in.cmd, in.fb);
+    // Sweep: run for latency - 1 clocks after the tick, done in the next.
+    done_ = run_ && left_ == 1;
+    if (run_) {
+      run_ = --left_ != 0;
+    } else if (tick_) {
+      run_ = true;
+      left_ = latency - 1;
+    }
+    // Timer, held while clearing; the first tick follows the clearing.
+    if (clr_) {
+      clr_ = ++cc_ != clear_cycles;
+      tick_ = false;
+      tcnt_ = 1;
+    } else {
+      tick_ = tcnt_ == 1;
+      tcnt_ = tcnt_ == 1 ? ts : tcnt_ - 1;
+    }
+  }
+
+ private:
+  PidCore<NAXES> core_;
+  bool clr_ = true, tick_ = false, run_ = false, done_ = false, rvalid_ = false;
+  int cc_ = 0, left_ = 0;
+  uint32_t tcnt_ = 1, rdata_ = 0;
+};
+
 }  // namespace mc

@@ -20,9 +20,6 @@
 //   low); clr_i clears the sticky flags (an event in the same cycle wins).
 `default_nettype none
 
-// Until the board top instantiates the cores together, each is a top of its
-// own when rtl/ is linted as a whole.
-/* verilator lint_off MULTITOP */
 module interp_core #(
     parameter integer FIFO_AW = 9  // log2 of the queue depth in words
 ) (
@@ -47,7 +44,6 @@ module interp_core #(
     output reg               ovf_o,
     output reg  [      15:0] seg_cnt_o
 );
-/* verilator lint_on MULTITOP */
 
   /* verilator lint_off UNUSEDPARAM */
 `include "interp_seg.vh"

@@ -59,9 +59,6 @@
 // A disabled axis runs the same steps; ic, D(k), v and u are forced to zero.
 `default_nettype none
 
-// Until the board top instantiates the cores together, each is a top of its
-// own when rtl/ is linted as a whole.
-/* verilator lint_off MULTITOP */
 module pid_core #(
     parameter integer NAXES = 3  // axes sharing the datapath (1..15)
 ) (
@@ -91,7 +88,6 @@ module pid_core #(
     output reg                    done_o,  // sweep finished, outputs valid
     output wire                   busy_o
 );
-/* verilator lint_on MULTITOP */
 
   /* verilator lint_off UNUSEDPARAM */
 `include "mc_fixed.vh"

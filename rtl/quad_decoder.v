@@ -35,9 +35,6 @@
 //   edge and estimate low speeds better than one count per sample.
 `default_nettype none
 
-// Until the board top instantiates the cores together, each is a top of its
-// own when rtl/ is linted as a whole.
-/* verilator lint_off MULTITOP */
 module quad_decoder #(
     parameter integer FILT_W = 8,   // filter length input width, bits (clocks up to 2^FILT_W-1)
     parameter integer ERR_W  = 16,  // error counter width, bits (saturates)
@@ -78,7 +75,6 @@ module quad_decoder #(
     output wire              b_o,
     output wire              z_o
 );
-/* verilator lint_on MULTITOP */
 
   initial begin
     if (FILT_W < 1 || FILT_W > 16) $error("quad_decoder: FILT_W must be 1..16");

@@ -32,6 +32,12 @@ mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
 set(MC_INTERP_RTL interp_core.v seg_fifo.v feed_gen.v line_interp.v arc_interp.v)
 list(TRANSFORM MC_INTERP_RTL PREPEND ${MC_RTL_DIR}/)
 mc_verilate(vinterp_core TOP interp_core SOURCES ${MC_INTERP_RTL})
+# The motion datapath: decoders, interpolator, PID and drive together. The
+# two-axis build is the XY table the co-simulation runs.
+set(MC_MOTION_RTL motion_core.v pid_core.v mul_align.v quad_decoder.v ${MC_INTERP_RTL})
+list(TRANSFORM MC_MOTION_RTL PREPEND ${MC_RTL_DIR}/ REGEX "^[^/]")
+mc_verilate(vmotion_core TOP motion_core SOURCES ${MC_MOTION_RTL})
+mc_verilate(vmotion_core2 TOP motion_core PREFIX Vmotion_core2 PARAMS -GNAXES=2 SOURCES ${MC_MOTION_RTL})
 mc_verilate(vquad_decoder TOP quad_decoder SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 # Small widths, so that every counter saturates in a short test: the same
 # values as mc::test::QuadSmall (tests/quad_harness.hpp).
@@ -81,3 +87,5 @@ set_tests_properties(synth_quad_decoder_ice40 PROPERTIES LABELS synth TIMEOUT 60
 # Fixed point against double precision (needs the host's coefficient design).
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
 target_link_libraries(test_pid_numerics PRIVATE mc_hls mc_host)
+mc_gtest(test_motion_core_rtl rtl test_motion_core_rtl.cpp)
+target_link_libraries(test_motion_core_rtl PRIVATE mc_hls mc_host vmotion_core vmotion_core2)

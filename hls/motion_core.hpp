@@ -1,0 +1,223 @@
+// motion_core twin: the motion datapath clock by clock. Mirrors
+// rtl/motion_core.v, which documents how to drive it: the decoders give the
+// feedback, the interpolator the command, pid_core closes the loops, and the
+// drive stage turns each sample's output into PWM and direction.
+//
+// outputs() describes the current clock (before its edge); clock(in) is the
+// edge. The sub-blocks are the twins of the RTL's instances, composed in the
+// same way, so every output equals the RTL's bit for bit.
+#pragma once
+
+#include <cstdint>
+
+#include "interp_core.hpp"
+#include "pid_core.hpp"
+#include "quad_decoder.hpp"
+
+namespace mc {
+
+template <int NAXES>
+struct MotionIn {
+  bool rst = false;
+  // PID configuration port
+  bool pid_we = false;
+  uint8_t pid_waddr = 0;
+  uint32_t pid_wdata = 0;
+  bool pid_re = false;
+  uint8_t pid_raddr = 0;
+  // interpolator
+  bool seg_wr = false;
+  uint32_t seg_wdata = 0;
+  bool ip_abort = false, ip_hold = false, ip_clr = false, ip_set = false;
+  int32_t ip_set_pos[3] = {};
+  // encoders
+  bool enc_a[NAXES] = {}, enc_b[NAXES] = {}, enc_z[NAXES] = {};
+  uint32_t enc_filt[NAXES] = {};
+  bool enc_dir_inv[NAXES] = {}, enc_idx_clr_en[NAXES] = {};
+  bool enc_pos_load[NAXES] = {};
+  int32_t enc_pos_load_val[NAXES] = {};
+  bool enc_idx_arm[NAXES] = {}, enc_idx_disarm[NAXES] = {}, enc_err_clr[NAXES] = {};
+  // drive control
+  bool drv_allow[NAXES] = {};
+  bool drv_ovr[NAXES] = {};
+  int16_t drv_ovr_val[NAXES] = {};
+};
+
+template <int NAXES>
+struct MotionOut {
+  bool pid_wready = false, pid_rready = false, pid_rvalid = false;
+  uint32_t pid_rdata = 0;
+  int seg_count = 0;
+  bool ip_busy = false, ip_underrun = false, ip_ovf = false;
+  int ip_seg_cnt = 0;
+  QuadOut enc[NAXES];
+  bool pwm[NAXES] = {}, dir[NAXES] = {}, drv_en[NAXES] = {};
+  int16_t drv_u[NAXES] = {};
+  bool tick = false, done = false;
+  int32_t smp_cmd[NAXES] = {}, smp_fb[NAXES] = {}, smp_err[NAXES] = {};
+  int16_t smp_u[NAXES] = {};
+  bool smp_sat[NAXES] = {}, pid_en[NAXES] = {};
+  int32_t pos[NAXES] = {}, cmd[NAXES] = {};
+};
+
+template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8>
+class MotionCore {
+  static_assert(NAXES >= 1 && NAXES <= 3, "motion_core: NAXES must be 1..3");
+  static_assert(PWM_BITS >= 1 && PWM_BITS <= 15, "motion_core: PWM_BITS must be 1..15");
+
+ public:
+  using In = MotionIn<NAXES>;
+  using Out = MotionOut<NAXES>;
+  using Pid = PidCoreClocked<NAXES>;
+  static constexpr int latency = Pid::latency;
+  static constexpr int pwm_bits = PWM_BITS;
+
+  // PWM duty, in counter steps of 2^PWM_BITS, of a drive value.
+  static constexpr uint32_t duty(int16_t u) {
+    return (u < 0 ? uint32_t(-int32_t(u)) : uint32_t(u)) >> (15 - PWM_BITS);
+  }
+
+  // The current clock's outputs. The PID's read port needs this clock's write
+  // request (a read is refused while a write is presented).
+  Out outputs(bool pid_we = false) const {
+    Out o;
+    o.pid_wready = pid_.wready();
+    o.pid_rready = pid_.rready(pid_we);
+    o.pid_rvalid = pid_.rvalid();
+    o.pid_rdata = pid_.rdata();
+    o.seg_count = ip_.count();
+    o.ip_busy = ip_.busy();
+    o.ip_underrun = ip_.underrun();
+    o.ip_ovf = ip_.ovf();
+    o.ip_seg_cnt = ip_.seg_cnt();
+    o.tick = pid_.tick();
+    o.done = pid_.done();
+    for (int a = 0; a < NAXES; ++a) {
+      o.enc[a] = dec_[a].out();
+      o.pwm[a] = r_.pwm[a];
+      o.dir[a] = r_.dir[a];
+      o.drv_en[a] = r_.drv_en[a];
+      o.drv_u[a] = r_.drv_u[a];
+      o.smp_cmd[a] = r_.smp_cmd[a];
+      o.smp_fb[a] = r_.smp_fb[a];
+      o.smp_err[a] = r_.smp_err[a];
+      o.smp_u[a] = r_.smp_u[a];
+      o.smp_sat[a] = r_.smp_sat[a];
+      o.pid_en[a] = pid_.enabled(a);
+      o.pos[a] = o.enc[a].pos;
+      o.cmd[a] = ip_.pos(a);
+    }
+    return o;
+  }
+
+  void clock(const In& in) {
+    Regs n = r_;  // nonblocking: every right-hand side reads r_
+    int32_t cmd[NAXES], fb[NAXES];
+    for (int a = 0; a < NAXES; ++a) {
+      cmd[a] = ip_.pos(a);
+      fb[a] = dec_[a].out().pos;
+    }
+    const bool tick = pid_.tick(), done = pid_.done();
+
+    if (tick)
+      for (int a = 0; a < NAXES; ++a) {
+        n.in_cmd[a] = cmd[a];
+        n.in_fb[a] = fb[a];
+      }
+    if (in.rst) {
+      for (int a = 0; a < NAXES; ++a) {
+        n.smp_cmd[a] = n.smp_fb[a] = n.smp_err[a] = 0;
+        n.smp_u[a] = 0;
+        n.smp_sat[a] = false;
+      }
+    } else if (done) {
+      for (int a = 0; a < NAXES; ++a) {
+        n.smp_cmd[a] = r_.in_cmd[a];
+        n.smp_fb[a] = r_.in_fb[a];
+        n.smp_err[a] = pid_.core().err(a);
+        n.smp_u[a] = int16_t(pid_.core().u(a));
+        n.smp_sat[a] = pid_.core().sat(a);
+      }
+    }
+
+    // Drive stage.
+    n.pcnt = in.rst ? 0 : (r_.pcnt + 1) & ((1u << PWM_BITS) - 1);
+    for (int a = 0; a < NAXES; ++a) {
+      const int16_t u_sel = !in.drv_allow[a] ? int16_t(0) : in.drv_ovr[a] ? in.drv_ovr_val[a] : r_.smp_u[a];
+      if (in.rst) {
+        n.drv_u[a] = 0;
+        n.pwm[a] = n.dir[a] = n.drv_en[a] = false;
+      } else {
+        n.drv_u[a] = u_sel;
+        n.pwm[a] = duty(u_sel) > r_.pcnt;
+        n.dir[a] = u_sel < 0;
+        n.drv_en[a] = in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]);
+      }
+    }
+
+    // Sub-blocks, each on the values of this clock.
+    typename Pid::In pi;
+    pi.rst = in.rst;
+    pi.we = in.pid_we;
+    pi.waddr = in.pid_waddr;
+    pi.wdata = in.pid_wdata;
+    pi.re = in.pid_re;
+    pi.raddr = in.pid_raddr;
+    pi.cmd = cmd;
+    pi.fb = fb;
+    pid_.clock(pi);
+
+    InterpIn ii;
+    ii.wr = in.seg_wr;
+    ii.wdata = in.seg_wdata;
+    ii.abort = in.ip_abort;
+    ii.hold = in.ip_hold;
+    ii.clr = in.ip_clr;
+    ii.set = in.ip_set;
+    for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
+    if (in.rst)
+      ip_.reset();
+    else
+      ip_.clock(ii);
+
+    for (int a = 0; a < NAXES; ++a) {
+      QuadIn qi;
+      qi.rst = in.rst;
+      qi.filt_len = in.enc_filt[a];
+      qi.dir_inv = in.enc_dir_inv[a];
+      qi.idx_clr_en = in.enc_idx_clr_en[a];
+      qi.pos_load = in.enc_pos_load[a];
+      qi.pos_load_val = in.enc_pos_load_val[a];
+      qi.idx_arm = in.enc_idx_arm[a];
+      qi.idx_disarm = in.enc_idx_disarm[a];
+      qi.err_clr = in.enc_err_clr[a];
+      qi.sample = tick;
+      qi.a = in.enc_a[a];
+      qi.b = in.enc_b[a];
+      qi.z = in.enc_z[a];
+      dec_[a].step(qi);
+    }
+    r_ = n;
+  }
+
+  const Pid& pid() const { return pid_; }
+  const InterpCore<FIFO_AW>& interp() const { return ip_; }
+  const QuadDecoder<FILT_W, 16, 32>& decoder(int a) const { return dec_[a]; }
+
+ private:
+  struct Regs {
+    int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
+    int32_t smp_cmd[NAXES] = {}, smp_fb[NAXES] = {}, smp_err[NAXES] = {};
+    int16_t smp_u[NAXES] = {};
+    bool smp_sat[NAXES] = {};
+    uint32_t pcnt = 0;
+    int16_t drv_u[NAXES] = {};
+    bool pwm[NAXES] = {}, dir[NAXES] = {}, drv_en[NAXES] = {};
+  };
+  Pid pid_;
+  InterpCore<FIFO_AW> ip_;
+  QuadDecoder<FILT_W, 16, 32> dec_[NAXES];
+  Regs r_;
+};
+
+}  // namespace mc

@@ -1,0 +1,273 @@
+// motion_core: the portable motion datapath of the board, without pins or
+// link. NAXES position loops: each axis's quadrature decoder gives the
+// feedback, the interpolator's position the command, the shared pid_core
+// closes the loops, and a PWM + direction generator drives an H-bridge.
+// Twin: hls/motion_core.hpp (cycle for cycle).
+//
+// How to drive it:
+// - Configure the PID through pid_* (pid_core's port, rtl/pid_regs.vh), the
+//   decoders through enc_* (quad_decoder's ports, one slice per axis), and
+//   queue segments through seg_wr/seg_wdata (interp_core's port; set the
+//   position with ip_set while the interpolator is idle).
+// - The PID samples smp_cmd/smp_fb at tick, for all axes at once, and the
+//   decoders take their velocity sample at the same tick. When the sweep ends
+//   (done), the sample's outputs are latched together into smp_* and reach
+//   the drive in the next clock, so every axis's drive changes in the same
+//   clock, LATENCY cycles (pid_core) + 2 after the tick.
+// - drv_allow (from the safety logic) low forces the drive value to 0 and the
+//   pins low in the next clock, whatever the PID does. drv_ovr hands an axis's
+//   drive to the host (drv_ovr_val) instead of the PID: the host-loop mode.
+// - PWM: a free-running PWM_BITS counter; the duty is the magnitude of
+//   drv_u in steps of 2^(15-PWM_BITS) drive units, so full scale is always
+//   on; dir_o gives the sign. drv_en_o enables the bridge for an axis whose
+//   PID is enabled or that is overridden, and is allowed.
+`default_nettype none
+
+module motion_core #(
+    parameter integer NAXES    = 3,  // axes, 1..3 (the interpolator moves three)
+    parameter integer FIFO_AW  = 9,  // log2 of the segment queue depth in words
+    parameter integer PWM_BITS = 9,  // PWM period 2^PWM_BITS clocks, duty resolution
+    parameter integer FILT_W   = 8   // encoder glitch filter length width, bits
+) (
+    // clock and reset
+    input  wire                  clk,
+    input  wire                  rst,
+    // PID configuration write (pid_core)
+    input  wire                  pid_we,
+    input  wire [           7:0] pid_waddr,
+    input  wire [          31:0] pid_wdata,
+    output wire                  pid_wready,
+    // PID configuration read (pid_core)
+    input  wire                  pid_re,
+    input  wire [           7:0] pid_raddr,
+    output wire                  pid_rready,
+    output wire                  pid_rvalid,
+    output wire [          31:0] pid_rdata,
+    // segment queue and interpolator control (interp_core)
+    input  wire                  seg_wr,
+    input  wire [          31:0] seg_wdata,
+    output wire [     FIFO_AW:0] seg_count,
+    input  wire                  ip_abort,
+    input  wire                  ip_hold,
+    input  wire                  ip_clr,
+    input  wire                  ip_set,
+    input  wire [      3*32-1:0] ip_set_pos,
+    output wire                  ip_busy,
+    output wire                  ip_underrun,
+    output wire                  ip_ovf,
+    output wire [          15:0] ip_seg_cnt,
+    // encoder pins (asynchronous; the decoders synchronize them)
+    input  wire [     NAXES-1:0] enc_a,
+    input  wire [     NAXES-1:0] enc_b,
+    input  wire [     NAXES-1:0] enc_z,
+    // encoder configuration and strobes, one slice per axis (quad_decoder)
+    input  wire [NAXES*FILT_W-1:0] enc_filt,
+    input  wire [     NAXES-1:0] enc_dir_inv,
+    input  wire [     NAXES-1:0] enc_idx_clr_en,
+    input  wire [     NAXES-1:0] enc_pos_load,
+    input  wire [  NAXES*32-1:0] enc_pos_load_val,
+    input  wire [     NAXES-1:0] enc_idx_arm,
+    input  wire [     NAXES-1:0] enc_idx_disarm,
+    input  wire [     NAXES-1:0] enc_err_clr,
+    // encoder status
+    output wire [     NAXES-1:0] enc_err,
+    output wire [  NAXES*16-1:0] enc_err_cnt,
+    output wire [  NAXES*32-1:0] enc_idx_pos,
+    output wire [     NAXES-1:0] enc_idx_armed,
+    output wire [     NAXES-1:0] enc_idx_seen,
+    output wire [  NAXES*32-1:0] enc_vel,
+    // drive control
+    input  wire [     NAXES-1:0] drv_allow,
+    input  wire [     NAXES-1:0] drv_ovr,
+    input  wire [  NAXES*16-1:0] drv_ovr_val,
+    // H-bridge pins
+    output reg  [     NAXES-1:0] pwm_o,
+    output reg  [     NAXES-1:0] dir_o,
+    output reg  [     NAXES-1:0] drv_en_o,
+    output reg  [  NAXES*16-1:0] drv_u,
+    // per-sample telemetry
+    output wire                  tick,
+    output wire                  done,
+    output reg  [  NAXES*32-1:0] smp_cmd,
+    output reg  [  NAXES*32-1:0] smp_fb,
+    output reg  [  NAXES*32-1:0] smp_err,
+    output reg  [  NAXES*16-1:0] smp_u,
+    output reg  [     NAXES-1:0] smp_sat,
+    output wire [     NAXES-1:0] pid_en,
+    // live positions
+    output wire [  NAXES*32-1:0] pos,
+    output wire [  NAXES*32-1:0] cmd
+);
+
+  initial begin
+    if (NAXES < 1 || NAXES > 3) $error("motion_core: NAXES must be 1..3");
+    if (PWM_BITS < 1 || PWM_BITS > 15) $error("motion_core: PWM_BITS must be 1..15");
+  end
+
+  // ---------------------------------------------------------------------
+  // Command: the interpolator's position, first NAXES axes (the others are
+  // unused in a one- or two-axis build).
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [3*32-1:0] ip_pos;
+  /* verilator lint_on UNUSEDSIGNAL */
+  assign cmd = ip_pos[NAXES*32-1:0];
+
+  interp_core #(
+      .FIFO_AW(FIFO_AW)
+  ) u_interp (
+      .clk       (clk),
+      .rst       (rst),
+      .wr_i      (seg_wr),
+      .wdata_i   (seg_wdata),
+      .count_o   (seg_count),
+      .abort_i   (ip_abort),
+      .hold_i    (ip_hold),
+      .clr_i     (ip_clr),
+      .set_i     (ip_set),
+      .set_pos_i (ip_set_pos),
+      .pos_o     (ip_pos),
+      .busy_o    (ip_busy),
+      .underrun_o(ip_underrun),
+      .ovf_o     (ip_ovf),
+      .seg_cnt_o (ip_seg_cnt)
+  );
+
+  // ---------------------------------------------------------------------
+  // Feedback: one decoder per axis, velocity sampled at the PID tick.
+  wire pid_tick;
+  genvar g;
+  generate
+    for (g = 0; g < NAXES; g = g + 1) begin : g_enc
+      /* verilator lint_off PINCONNECTEMPTY */
+      quad_decoder #(
+          .FILT_W(FILT_W),
+          .ERR_W (16),
+          .VEL_W (32)
+      ) u_dec (
+          .clk           (clk),
+          .rst           (rst),
+          .filt_len_i    (enc_filt[g*FILT_W+:FILT_W]),
+          .dir_inv_i     (enc_dir_inv[g]),
+          .idx_clr_en_i  (enc_idx_clr_en[g]),
+          .pos_load_i    (enc_pos_load[g]),
+          .pos_load_val_i(enc_pos_load_val[g*32+:32]),
+          .idx_arm_i     (enc_idx_arm[g]),
+          .idx_disarm_i  (enc_idx_disarm[g]),
+          .err_clr_i     (enc_err_clr[g]),
+          .sample_i      (pid_tick),
+          .enc_a_i       (enc_a[g]),
+          .enc_b_i       (enc_b[g]),
+          .enc_z_i       (enc_z[g]),
+          .pos_o         (pos[g*32+:32]),
+          .idx_pos_o     (enc_idx_pos[g*32+:32]),
+          .idx_armed_o   (enc_idx_armed[g]),
+          .idx_seen_o    (enc_idx_seen[g]),
+          .err_o         (enc_err[g]),
+          .err_cnt_o     (enc_err_cnt[g*16+:16]),
+          .vel_o         (enc_vel[g*32+:32]),
+          .age_o         (),
+          .a_o           (),
+          .b_o           (),
+          .z_o           ()
+      );
+      /* verilator lint_on PINCONNECTEMPTY */
+    end
+  endgenerate
+
+  // ---------------------------------------------------------------------
+  // The loops.
+  wire [NAXES*16-1:0] pid_u;
+  wire [NAXES*32-1:0] pid_err;
+  wire [   NAXES-1:0] pid_sat;
+  /* verilator lint_off PINCONNECTEMPTY */
+  pid_core #(
+      .NAXES(NAXES)
+  ) u_pid (
+      .clk       (clk),
+      .rst       (rst),
+      .cfg_we    (pid_we),
+      .cfg_waddr (pid_waddr),
+      .cfg_wdata (pid_wdata),
+      .cfg_wready(pid_wready),
+      .cfg_re    (pid_re),
+      .cfg_raddr (pid_raddr),
+      .cfg_rready(pid_rready),
+      .cfg_rvalid(pid_rvalid),
+      .cfg_rdata (pid_rdata),
+      .cmd_i     (cmd),
+      .fb_i      (pos),
+      .u_o       (pid_u),
+      .err_o     (pid_err),
+      .sat_o     (pid_sat),
+      .en_o      (pid_en),
+      .tick_o    (pid_tick),
+      .done_o    (done),
+      .busy_o    ()
+  );
+  /* verilator lint_on PINCONNECTEMPTY */
+  assign tick = pid_tick;
+
+  // The inputs as pid_core sampled them, for telemetry: held from tick, so
+  // they are published with the outputs they produced.
+  reg [NAXES*32-1:0] in_cmd, in_fb;
+  always @(posedge clk) begin
+    if (pid_tick) begin
+      in_cmd <= cmd;
+      in_fb  <= pos;
+    end
+  end
+
+  // pid_core writes each axis's outputs at a different clock of the sweep;
+  // latching them at done publishes one coherent sample.
+  always @(posedge clk) begin
+    if (rst) begin
+      smp_cmd <= {NAXES * 32{1'b0}};
+      smp_fb  <= {NAXES * 32{1'b0}};
+      smp_err <= {NAXES * 32{1'b0}};
+      smp_u   <= {NAXES * 16{1'b0}};
+      smp_sat <= {NAXES{1'b0}};
+    end else if (done) begin
+      smp_cmd <= in_cmd;
+      smp_fb  <= in_fb;
+      smp_err <= pid_err;
+      smp_u   <= pid_u;
+      smp_sat <= pid_sat;
+    end
+  end
+
+  // ---------------------------------------------------------------------
+  // Drive: value select, then PWM. Registered so the pins are glitch-free
+  // and a safety drop takes effect in one clock.
+  reg [PWM_BITS-1:0] pcnt;
+  always @(posedge clk) begin
+    if (rst) pcnt <= {PWM_BITS{1'b0}};
+    else pcnt <= pcnt + 1'b1;
+  end
+
+  generate
+    for (g = 0; g < NAXES; g = g + 1) begin : g_drv
+      wire signed [15:0] u_sel = ~drv_allow[g] ? 16'sd0 :
+                                 drv_ovr[g] ? drv_ovr_val[g*16+:16] : smp_u[g*16+:16];
+      // |u| fits 16 bits unsigned even for -32768, which is full scale.
+      wire        [15:0] u_mag = u_sel[15] ? 16'd0 - u_sel : u_sel;
+      wire        [15:0] duty = u_mag >> (15 - PWM_BITS);
+      wire        [15:0] pcnt_w = {{(16 - PWM_BITS) {1'b0}}, pcnt};
+      always @(posedge clk) begin
+        if (rst) begin
+          drv_u[g*16+:16] <= 16'd0;
+          pwm_o[g]        <= 1'b0;
+          dir_o[g]        <= 1'b0;
+          drv_en_o[g]     <= 1'b0;
+        end else begin
+          drv_u[g*16+:16] <= u_sel;
+          pwm_o[g]        <= duty > pcnt_w;
+          dir_o[g]        <= u_sel[15];
+          drv_en_o[g]     <= drv_allow[g] & (pid_en[g] | drv_ovr[g]);
+        end
+      end
+    end
+  endgenerate
+
+endmodule
+
+`default_nettype wire
