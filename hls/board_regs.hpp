@@ -18,10 +18,10 @@ namespace mc::board {
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
 constexpr uint8_t VERSION = 1;
-constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
+constexpr int HDR_BYTES = 4;  // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
-constexpr int MAX_LEN = 240;    // payload bytes: six segments
-constexpr int SEG_BYTES = 40;   // one interpolator segment (10 words)
+constexpr int MAX_LEN = 240;           // payload bytes: six segments
+constexpr int SEG_BYTES = 40;          // one interpolator segment (10 words)
 constexpr int BYTE_TIMEOUT_US = 1000;  // a frame stalled this long is dropped
 
 // Commands (host to board). A reply carries CMD | REPLY.
@@ -30,8 +30,8 @@ constexpr uint8_t CMD_READ = 0x01;   // addr16
 constexpr uint8_t CMD_WRITE = 0x02;  // addr16, data32
 constexpr uint8_t CMD_SEG = 0x03;    // 1..6 segments, 40 bytes each
 constexpr uint8_t REPLY = 0x80;
-constexpr uint8_t CMD_TLM = 0xC0;    // board to host, unsolicited: telemetry
-constexpr int REPLY_LEN = 5;         // status byte + value32
+constexpr uint8_t CMD_TLM = 0xC0;  // board to host, unsolicited: telemetry
+constexpr int REPLY_LEN = 5;       // status byte + value32
 
 // Reply status.
 constexpr uint8_t ST_OK = 0;
@@ -115,7 +115,7 @@ constexpr int F_ENC_LSB = 12;   // one bit per axis
 constexpr int C_ARM = 0;      // drives may run; cleared by any fault
 constexpr int C_IP_HOLD = 1;  // pause the feed
 // SAFETY (defaults: every limit and the e-stop enabled, active high)
-constexpr int S_LIM_EN_LSB = 0;   // one bit per axis
+constexpr int S_LIM_EN_LSB = 0;  // one bit per axis
 constexpr int S_ESTOP_EN = 3;
 constexpr int S_LIM_INV_LSB = 4;  // one bit per axis: the input trips when low
 constexpr int S_ESTOP_INV = 7;
@@ -198,7 +198,8 @@ constexpr std::array<RegDef, 31> REGS = {{
     {"LINK_JUNK", reg::LINK_JUNK, false, Access::R, "[15:0] bytes skipped looking for SYNC"},
     {"IP_CTRL", reg::IP_CTRL, false, Access::RW,
      "strobes: [0] abort, [1] clear flags, [2] set position from IP_SET_X..Z"},
-    {"IP_STAT", reg::IP_STAT, false, Access::R, "[FIFO_AW:0] words queued, [16] busy, [17] underrun, [18] overflow"},
+    {"IP_STAT", reg::IP_STAT, false, Access::R,
+     "[FIFO_AW:0] words queued, [16] busy, [17] underrun, [18] overflow"},
     {"IP_SEGS", reg::IP_SEGS, false, Access::R, "[15:0] segments completed"},
     {"IP_SET_X", reg::IP_SET_X, false, Access::RW, "position IP_CTRL.set loads, counts"},
     {"IP_SET_Y", reg::IP_SET_Y, false, Access::RW, "position IP_CTRL.set loads, counts"},
@@ -206,14 +207,16 @@ constexpr std::array<RegDef, 31> REGS = {{
     {"HW_POS", reg::HW_POS, false, Access::RWL, "handwheel position, counts; write loads"},
     {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks, [8] reverse"},
     {"TLM_HDR", reg::TLM_HDR, false, Access::R, "[15:0] PID sample count, [31:16] FAULT"},
-    {"POS", reg::AX_POS, true, Access::RWL, "encoder position at the last sample, counts; write loads the counter"},
+    {"POS", reg::AX_POS, true, Access::RWL,
+     "encoder position at the last sample, counts; write loads the counter"},
     {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW, "[7:0] filter clocks, [8] reverse, [9] index clears"},
     {"IDX", reg::AX_IDX, true, Access::RWL, "index position latched, counts; write [0] arm, [1] disarm"},
     {"ENC_STAT", reg::AX_ENC_STAT, true, Access::RWL,
      "[15:0] encoder errors, [16] error, [17] index armed, [18] index seen; write [0] clears errors"},
     {"CMD", reg::AX_CMD, true, Access::R, "command at the last sample, counts"},
     {"ERR", reg::AX_ERR, true, Access::R, "PID error at the last sample, counts"},
-    {"OUT", reg::AX_OUT, true, Access::R, "[15:0] PID output, [16] saturated, [17] PID enabled, [18] drive enabled"},
+    {"OUT", reg::AX_OUT, true, Access::R,
+     "[15:0] PID output, [16] saturated, [17] PID enabled, [18] drive enabled"},
     {"DRV", reg::AX_DRV, true, Access::RWL,
      "read: [15:0] drive value applied, [16] override on; write: [15:0] value, [16] override"},
     {"FERR", reg::AX_FERR, true, Access::RW, "following-error limit, counts [15:0] (0 off)"},

@@ -97,8 +97,8 @@ std::string board_regs_vh() {
     if (k.width == 0)
       std::snprintf(buf, sizeof buf, "localparam integer %s = %ld;\n", k.name.c_str(), k.value);
     else
-      std::snprintf(buf, sizeof buf, "localparam [%d:0] %s = %d'h%0*lX;\n", k.width - 1, k.name.c_str(), k.width,
-                    (k.width + 3) / 4, k.value);
+      std::snprintf(buf, sizeof buf, "localparam [%d:0] %s = %d'h%0*lX;\n", k.width - 1, k.name.c_str(),
+                    k.width, (k.width + 3) / 4, k.value);
     o << buf;
   }
   return o.str();
@@ -111,8 +111,8 @@ std::string board_regs_md() {
   char buf[64];
   for (const auto& r : board::REGS) {
     if (r.per_axis)
-      std::snprintf(buf, sizeof buf, "0x%04X + 0x%02X·a + 0x%X", board::reg::AXIS_BASE, board::reg::AXIS_STRIDE,
-                    r.addr);
+      std::snprintf(buf, sizeof buf, "0x%04X + 0x%02X·a + 0x%X", board::reg::AXIS_BASE,
+                    board::reg::AXIS_STRIDE, r.addr);
     else
       std::snprintf(buf, sizeof buf, "0x%04X", r.addr);
     o << "| " << buf << " | " << (r.per_axis ? std::string(r.name) + "[a]" : std::string(r.name)) << " | "

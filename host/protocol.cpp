@@ -138,9 +138,10 @@ bool is_reply(const Frame& f) {
 
 Reply parse_reply(const Frame& f) {
   if (!is_reply(f) || f.payload.size() != size_t(P::REPLY_LEN))
-    throw InputError("reply frame", "cmd " + std::to_string(f.cmd) + ", " + std::to_string(f.payload.size()) +
-                                        " payload bytes",
-                     "a reply command (bit 7 set) with " + std::to_string(P::REPLY_LEN) + " payload bytes");
+    throw InputError(
+        "reply frame",
+        "cmd " + std::to_string(f.cmd) + ", " + std::to_string(f.payload.size()) + " payload bytes",
+        "a reply command (bit 7 set) with " + std::to_string(P::REPLY_LEN) + " payload bytes");
   return Reply{f.seq, uint8_t(f.cmd & ~P::REPLY), f.payload[0], get32(f.payload, 1)};
 }
 

@@ -112,9 +112,9 @@ struct AxisSample {
   bool sat = false, pid_en = false, drv_en = false;
 };
 struct Telemetry {
-  uint8_t seq = 0;        // telemetry frame counter
-  uint16_t sample = 0;    // PID sample count (mod 2^16): gaps show skipped frames
-  uint16_t fault = 0;     // FAULT register
+  uint8_t seq = 0;      // telemetry frame counter
+  uint16_t sample = 0;  // PID sample count (mod 2^16): gaps show skipped frames
+  uint16_t fault = 0;   // FAULT register
   std::vector<AxisSample> axes;
 };
 bool is_telemetry(const Frame& f);

@@ -658,6 +658,9 @@ module mc_regs #(
   /* verilator lint_on UNUSEDSIGNAL */
   reg         w_end;
   reg  [ 3:0] tlm_n;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [ 3:0] ferr_hit = {3'd0, flim != 16'd0 && fsum[32]} << ta2;
+  /* verilator lint_on UNUSEDSIGNAL */
   always @(posedge clk) begin
     ferr_o <= {NAXES{1'b0}};
     w_end  <= t_v & t_last;
@@ -677,7 +680,7 @@ module mc_regs #(
         case (t_k)
           2'd0: fb_l <= q;
           2'd1: dif <= q - fb_l;
-          2'd2: ferr_o[ta2] <= flim != 16'd0 && fsum[32];
+          2'd2: ferr_o <= ferr_hit[NAXES-1:0];
           default: ;
         endcase
       end

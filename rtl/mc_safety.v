@@ -29,7 +29,8 @@ module mc_safety #(
     input  wire [     23:0] wdog_i,     // clock cycles
     input  wire             kick_i,     // a valid frame arrived
     // fault sources
-    input  wire             estop_i,    // synchronized pin
+    input  wire             estop_i,    // synchronized pin (polarity and enable: cfg_i)
+    input  wire             stop_i,     // local stop button, active high, always enabled
     input  wire [NAXES-1:0] lim_i,      // synchronized pins
     input  wire [NAXES-1:0] ferr_i,     // following-error trips
     input  wire [NAXES-1:0] enc_err_i,  // decoder error flags
@@ -49,7 +50,7 @@ module mc_safety #(
     if (NAXES < 1 || NAXES > 3) $error("mc_safety: NAXES must be 1..3");
   end
 
-  assign estop_act_o = cfg_i[B_S_ESTOP_EN] & (estop_i ^ cfg_i[B_S_ESTOP_INV]);
+  assign estop_act_o = stop_i | (cfg_i[B_S_ESTOP_EN] & (estop_i ^ cfg_i[B_S_ESTOP_INV]));
   assign lim_act_o = cfg_i[B_S_LIM_EN_LSB+:NAXES] & (lim_i ^ cfg_i[B_S_LIM_INV_LSB+:NAXES]);
 
   // Watchdog: counts while armed, restarts on every valid frame.
