@@ -7,8 +7,9 @@
 // - Each fault source sets its bit of fault_o (bit positions B_F_* of
 //   rtl/board_regs.vh) and disarms at once: the watchdog (armed and no
 //   kick_i for wdog_i clocks), the e-stop, a limit switch of an axis, a
-//   following-error trip (ferr_i, a strobe) and an encoder error (enc_err_i,
-//   a level). Enables and polarities of the switches come from cfg_i
+//   following-error trip (ferr_i, a strobe) and an encoder error (the rise
+//   of enc_err_i, the decoder's sticky flag: the host clears the flag along
+//   with the FAULT bit, and the flag falls a clock after that). Enables and polarities of the switches come from cfg_i
 //   (the SAFETY register).
 // - clr_i clears the bits set in it (write 1 to clear). A condition still
 //   present sets its bit again at once, so a fault is cleared only once its
@@ -61,6 +62,9 @@ module mc_safety #(
     else if (!wd_trip) wd <= wd + 24'd1;
   end
 
+  reg [NAXES-1:0] enc_err_d;
+  always @(posedge clk) enc_err_d <= rst ? {NAXES{1'b0}} : enc_err_i;
+
   reg [15:0] ev;
   always @(*) begin
     ev = 16'd0;
@@ -68,7 +72,7 @@ module mc_safety #(
     ev[B_F_ESTOP] = estop_act_o;
     ev[B_F_LIMIT_LSB+:NAXES] = lim_act_o;
     ev[B_F_FERR_LSB+:NAXES] = ferr_i;
-    ev[B_F_ENC_LSB+:NAXES] = enc_err_i;
+    ev[B_F_ENC_LSB+:NAXES] = enc_err_i & ~enc_err_d;
   end
 
   always @(posedge clk) begin
