@@ -50,4 +50,5 @@ synth: deps
 # Program the iCEBreaker (volatile, into the FPGA's SRAM by default; iceprog
 # without -S writes the flash). Needs the board on USB.
 prog:
+	@test -f $(BUILD)/synth/motioncore_icebreaker.bin || { echo "run make synth first" >&2; exit 2; }
 	iceprog $(BUILD)/synth/motioncore_icebreaker.bin

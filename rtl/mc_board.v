@@ -18,7 +18,8 @@ module mc_board #(
     parameter integer PWM_BITS = 9,           // PWM period 2^PWM_BITS clocks
     parameter integer FILT_W   = 8,           // encoder filter length bits
     parameter integer CLK_HZ   = 12_000_000,  // clock, Hz
-    parameter integer BAUD     = 1_000_000    // UART rate, bit/s
+    parameter integer BAUD     = 1_000_000,   // UART rate, bit/s
+    parameter integer HANDWHEEL = 1           // 1: build the handwheel decoder, 0: HW_POS reads 0
 ) (
     // clock and reset
     input  wire             clk,
@@ -329,6 +330,8 @@ module mc_board #(
   );
 
   // Handwheel: a decoder of its own, position only (the rest is trimmed).
+  generate
+    if (HANDWHEEL != 0) begin : g_hw
   /* verilator lint_off PINCONNECTEMPTY */
   quad_decoder #(
       .FILT_W(FILT_W),
@@ -363,6 +366,13 @@ module mc_board #(
       .z_o           ()
   );
   /* verilator lint_on PINCONNECTEMPTY */
+    end else begin : g_no_hw
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused_hw = &{hw_a_i, hw_b_i, hw_filt, hw_dir_inv, hw_load, hw_load_val};
+      /* verilator lint_on UNUSEDSIGNAL */
+      assign hw_pos = 32'd0;
+    end
+  endgenerate
 
   // LEDs: a heartbeat of about 1 Hz while disarmed shows the design runs.
   localparam integer HB_W = $clog2(CLK_HZ);

@@ -11,7 +11,8 @@
 module motioncore_icebreaker #(
     parameter integer NAXES  = 3,           // axes built (1..3): X, then Y, then Z
     parameter integer CLK_HZ = 12_000_000,  // the board oscillator, Hz
-    parameter integer BAUD   = 1_000_000    // host link, bit/s
+    parameter integer BAUD   = 1_000_000,   // host link, bit/s
+    parameter integer HANDWHEEL = 1         // build the handwheel decoder
 ) (
     // clock: 12 MHz oscillator
     input  wire CLK,
@@ -83,7 +84,8 @@ module motioncore_icebreaker #(
   mc_board #(
       .NAXES (NAXES),
       .CLK_HZ(CLK_HZ),
-      .BAUD  (BAUD)
+      .BAUD  (BAUD),
+      .HANDWHEEL(HANDWHEEL)
   ) u_board (
       .clk        (clk_w),
       .rst        (rst),

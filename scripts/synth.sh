@@ -13,6 +13,7 @@
 # Fmax is below the clock.
 # usage: [NAXES=n] synth.sh [out-dir] [--modules]
 #   NAXES      axes to build (default: the top's parameter, 3)
+#   HANDWHEEL  0 leaves the handwheel decoder out (default 1)
 #   --modules  also print a per-module LUT4 breakdown (a separate, unflattened
 #              Yosys run; it does not affect the bitstream)
 set -euo pipefail
@@ -28,6 +29,7 @@ rtl="$root/rtl"
 echo "synth: yosys (log: $out/yosys.log)"
 chp=""
 if [ -n "${NAXES:-}" ]; then chp="chparam -set NAXES $NAXES $top;"; fi
+if [ -n "${HANDWHEEL:-}" ]; then chp="$chp chparam -set HANDWHEEL $HANDWHEEL $top;"; fi
 yosys -q -l "$out/yosys.log" -p "read_verilog -I$rtl $rtl/*.v; $chp synth_ice40 -dsp -top $top -json $out/$top.json; tee -q -o $out/stat.txt stat" >/dev/null
 if grep -E "^Latch inferred|conflicting drivers|^ERROR" "$out/yosys.log" >&2; then
   echo "synth: Yosys reported the problems above" >&2
@@ -40,8 +42,16 @@ status=0
 nextpnr-ice40 --up5k --package sg48 --pcf "$root/constraints/icebreaker.pcf" --json "$out/$top.json" \
   --freq "$clock_mhz" --seed "$seed" --report "$out/nextpnr_report.json" --asc "$out/$top.asc" \
   >"$out/nextpnr.log" 2>&1 || status=$?
+naxes=${NAXES:-$(grep -oE "parameter integer NAXES += [0-9]+" "$rtl/$top.v" | grep -oE "[0-9]+$")}
 if [ $status -ne 0 ]; then
   grep -E "ERROR|Utilisation|ICESTORM_LC" "$out/nextpnr.log" | tail -8 >&2
+  # What nextpnr counted before it gave up, for the record (no Fmax: not placed).
+  lc_line=$(grep -E "ICESTORM_LC:" "$out/nextpnr.log" | tail -1 | sed -E 's/.*ICESTORM_LC: *([0-9]+)\/ *([0-9]+).*/\1 \2/')
+  read -r lc lc_total <<<"${lc_line:-0 0}"
+  jq -n --argjson lut "$lc" --argjson lut_total "$lc_total" --argjson lut4 "$lut4" --argjson naxes "$naxes" \
+    --argjson clock "$clock_mhz" \
+    '{lut: $lut, lut_total: $lut_total, lut4: $lut4, dsp: null, ebr: null, fmax_mhz: null, clock_mhz: $clock,
+      naxes: $naxes, fits: false}' >"$out/report.json"
   echo "synth: nextpnr failed (exit $status): the design does not fit or cannot be routed; see $out/nextpnr.log" >&2
   exit 1
 fi
@@ -56,11 +66,10 @@ lc_total=$(avail ICESTORM_LC)
 dsp=$(used ICESTORM_DSP)
 ebr=$(used ICESTORM_RAM)
 fmax=$(jq -r '[.fmax[] | .achieved] | min' "$rep")
-naxes=${NAXES:-$(grep -oE "parameter integer NAXES += [0-9]+" "$rtl/$top.v" | grep -oE "[0-9]+$")}
 jq -n --argjson lut "$lc" --argjson lut_total "$lc_total" --argjson lut4 "$lut4" --argjson dsp "$dsp" \
   --argjson ebr "$ebr" --argjson fmax "$fmax" --argjson clock "$clock_mhz" --argjson naxes "$naxes" \
   '{lut: $lut, lut_total: $lut_total, lut4: $lut4, dsp: $dsp, ebr: $ebr,
-    fmax_mhz: ($fmax * 100 | round / 100), clock_mhz: $clock, naxes: $naxes}' >"$out/report.json"
+    fmax_mhz: ($fmax * 100 | round / 100), clock_mhz: $clock, naxes: $naxes, fits: true}' >"$out/report.json"
 
 pct() { awk -v a="$1" -v b="$2" 'BEGIN {printf "%.0f", 100 * a / b}'; }
 echo
