@@ -5,7 +5,7 @@ BUILD_SAN  ?= build-san
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint format clean
+.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -40,3 +40,21 @@ format:
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN)
+
+# Regenerate rtl/board_regs.vh and the register table of docs/protocol.md
+# from hls/board_regs.hpp (test_board_regs fails when they are stale).
+regs: deps configure
+	cmake --build $(BUILD) --target gen_board_regs
+	$(BUILD)/gen_board_regs --vh > rtl/board_regs.vh
+	scripts/splice_md.sh docs/protocol.md "<!-- GENERATED register table: make regs -->" \
+	  "<!-- end of generated table -->" $(BUILD)/gen_board_regs --md
+
+# Bitstream and utilization/timing summary: build/synth/ (scripts/synth.sh).
+synth: deps
+	scripts/synth.sh $(BUILD)/synth
+
+# Program the iCEBreaker (volatile, into the FPGA's SRAM by default; iceprog
+# without -S writes the flash). Needs the board on USB.
+prog:
+	@test -f $(BUILD)/synth/motioncore_icebreaker.bin || { echo "run make synth first" >&2; exit 2; }
+	iceprog $(BUILD)/synth/motioncore_icebreaker.bin

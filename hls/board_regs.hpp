@@ -1,0 +1,229 @@
+// The board's link protocol constants and register map: the one source.
+// rtl/board_regs.vh and the register table of docs/protocol.md are generated
+// from this file (`make regs`, host/gen_board_regs.cpp); the unit test
+// test_board_regs fails when either is stale, so edit here and regenerate.
+//
+// Frame (docs/protocol.md is the spec):
+//   SYNC, LEN, SEQ, CMD, payload[LEN], CRC-16 low byte, CRC-16 high byte
+// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final xor)
+// over LEN, SEQ, CMD and the payload. Multi-byte fields are little-endian.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace mc::board {
+
+// ---- protocol constants -------------------------------------------------
+namespace proto {
+constexpr uint8_t SYNC = 0xA5;
+constexpr uint8_t VERSION = 1;
+constexpr int HDR_BYTES = 4;  // SYNC, LEN, SEQ, CMD
+constexpr int CRC_BYTES = 2;
+constexpr int MAX_LEN = 240;           // payload bytes: six segments
+constexpr int SEG_BYTES = 40;          // one interpolator segment (10 words)
+constexpr int BYTE_TIMEOUT_US = 1000;  // a frame stalled this long is dropped
+
+// Commands (host to board). A reply carries CMD | REPLY.
+constexpr uint8_t CMD_PING = 0x00;   // no payload; starts a session (forgets the last sequence number)
+constexpr uint8_t CMD_READ = 0x01;   // addr16
+constexpr uint8_t CMD_WRITE = 0x02;  // addr16, data32
+constexpr uint8_t CMD_SEG = 0x03;    // 1..6 segments, 40 bytes each
+constexpr uint8_t REPLY = 0x80;
+constexpr uint8_t CMD_TLM = 0xC0;  // board to host, unsolicited: telemetry
+constexpr int REPLY_LEN = 5;       // status byte + value32
+
+// Reply status.
+constexpr uint8_t ST_OK = 0;
+constexpr uint8_t ST_DUP = 1;      // same SEQ as the last applied frame: answered, not applied again
+constexpr uint8_t ST_BAD_REG = 2;  // no such register, or not writable
+constexpr uint8_t ST_BAD_LEN = 3;  // LEN does not fit the command
+constexpr uint8_t ST_BAD_CMD = 4;  // unknown command
+constexpr uint8_t ST_FULL = 5;     // segment queue lacks room for the whole frame: not applied
+}  // namespace proto
+
+// ---- register map ----------------------------------------------------------
+namespace reg {
+// PID registers: 0x0000 + hls/pid_regs.hpp address ({axis, reg}), passed through.
+constexpr uint16_t PID_BASE = 0x0000;
+// Global registers.
+constexpr uint16_t ID = 0x0100;
+constexpr uint16_t INFO = 0x0101;
+constexpr uint16_t CLK_HZ = 0x0102;
+constexpr uint16_t BAUD = 0x0103;
+constexpr uint16_t STATUS = 0x0104;
+constexpr uint16_t FAULT = 0x0105;
+constexpr uint16_t CTRL = 0x0106;
+constexpr uint16_t WDOG = 0x0107;
+constexpr uint16_t SAFETY = 0x0108;
+constexpr uint16_t TLM = 0x0109;
+constexpr uint16_t LINK_CRC = 0x010A;
+constexpr uint16_t LINK_CMD = 0x010B;
+constexpr uint16_t LINK_JUNK = 0x010C;
+constexpr uint16_t IP_CTRL = 0x010D;
+constexpr uint16_t IP_STAT = 0x010E;
+constexpr uint16_t IP_SEGS = 0x010F;
+constexpr uint16_t IP_SET_X = 0x0110;
+constexpr uint16_t IP_SET_Y = 0x0111;
+constexpr uint16_t IP_SET_Z = 0x0112;
+constexpr uint16_t HW_POS = 0x0113;
+constexpr uint16_t HW_CFG = 0x0114;
+constexpr uint16_t TLM_HDR = 0x0115;
+constexpr uint16_t GLOBAL_END = 0x0116;  // first unused global address
+// Per-axis registers: AXIS_BASE + axis * AXIS_STRIDE + offset.
+constexpr uint16_t AXIS_BASE = 0x0200;
+constexpr uint16_t AXIS_STRIDE = 0x10;
+constexpr uint16_t AX_POS = 0x0;
+constexpr uint16_t AX_ENC_CFG = 0x1;
+constexpr uint16_t AX_IDX = 0x2;
+constexpr uint16_t AX_ENC_STAT = 0x3;
+constexpr uint16_t AX_CMD = 0x4;
+constexpr uint16_t AX_ERR = 0x5;
+constexpr uint16_t AX_OUT = 0x6;
+constexpr uint16_t AX_DRV = 0x7;
+constexpr uint16_t AX_FERR = 0x8;
+constexpr uint16_t AX_END = 0x9;  // first unused offset
+
+constexpr uint16_t axis(int a, uint16_t off) {
+  return uint16_t(AXIS_BASE + a * AXIS_STRIDE + off);
+}
+}  // namespace reg
+
+// ---- register fields -------------------------------------------------------
+namespace bits {
+constexpr uint32_t ID_MAGIC = 0x4D430000;  // "MC" in the high half, VERSION in the low
+// INFO
+constexpr int INFO_NAXES_LSB = 0;    // 4 bits
+constexpr int INFO_FIFO_AW_LSB = 4;  // 4 bits
+constexpr int INFO_VERSION_LSB = 8;  // 8 bits
+// STATUS (live)
+constexpr int ST_ARMED = 0;
+constexpr int ST_ESTOP_IN = 1;
+constexpr int ST_IP_BUSY = 2;
+constexpr int ST_IP_UNDERRUN = 3;
+constexpr int ST_IP_OVF = 4;
+constexpr int ST_LIMIT_IN_LSB = 8;  // one bit per axis
+constexpr int ST_DRV_EN_LSB = 12;   // one bit per axis
+constexpr int ST_PID_EN_LSB = 16;   // one bit per axis
+// FAULT (latched; write 1 to clear)
+constexpr int F_WDOG = 0;
+constexpr int F_ESTOP = 1;
+constexpr int F_LIMIT_LSB = 4;  // one bit per axis
+constexpr int F_FERR_LSB = 8;   // one bit per axis
+constexpr int F_ENC_LSB = 12;   // one bit per axis
+// CTRL
+constexpr int C_ARM = 0;      // drives may run; cleared by any fault
+constexpr int C_IP_HOLD = 1;  // pause the feed
+// SAFETY (defaults: every limit and the e-stop enabled, active high)
+constexpr int S_LIM_EN_LSB = 0;  // one bit per axis
+constexpr int S_ESTOP_EN = 3;
+constexpr int S_LIM_INV_LSB = 4;  // one bit per axis: the input trips when low
+constexpr int S_ESTOP_INV = 7;
+constexpr uint32_t SAFETY_DEFAULT = 0x0F;
+// TLM
+constexpr int T_DECIM_LSB = 0;  // 16 bits: a frame every DECIM samples, 0 = off
+constexpr int T_AXES_LSB = 16;  // 3 bits: axes in the frame
+// IP_CTRL (strobes)
+constexpr int I_ABORT = 0;
+constexpr int I_CLR = 1;
+constexpr int I_SET = 2;
+// IP_STAT
+constexpr int IS_COUNT_LSB = 0;  // words queued, FIFO_AW + 1 bits
+constexpr int IS_BUSY = 16;
+constexpr int IS_UNDERRUN = 17;
+constexpr int IS_OVF = 18;
+// HW_CFG, AX_ENC_CFG
+constexpr int E_FILT_LSB = 0;  // 8 bits, clocks
+constexpr int E_DIR_INV = 8;
+constexpr int E_IDX_CLR_EN = 9;
+// AX_IDX writes
+constexpr int X_ARM = 0;
+constexpr int X_DISARM = 1;
+// AX_ENC_STAT
+constexpr int ES_ERR_CNT_LSB = 0;  // 16 bits
+constexpr int ES_ERR = 16;
+constexpr int ES_IDX_ARMED = 17;
+constexpr int ES_IDX_SEEN = 18;
+constexpr int ES_W_ERR_CLR = 0;  // write
+// AX_OUT
+constexpr int O_U_LSB = 0;  // 16 bits, signed
+constexpr int O_SAT = 16;
+constexpr int O_PID_EN = 17;
+constexpr int O_DRV_EN = 18;
+// AX_DRV
+constexpr int D_VAL_LSB = 0;  // 16 bits, signed
+constexpr int D_OVR = 16;
+}  // namespace bits
+
+// Reset values of the writable registers (what a read returns before a write).
+constexpr uint32_t wdog_default(uint32_t clk_hz) {
+  return clk_hz / 10;  // 100 ms
+}
+constexpr int WDOG_W = 24;  // watchdog period bits, clock cycles
+
+// ---- the table ---------------------------------------------------------------
+enum class Access : uint8_t {
+  R,    // read-only, live value
+  RW,   // written value reads back
+  RWL,  // write acts (load, strobe, clear), read gives the live value
+};
+
+struct RegDef {
+  const char* name;
+  uint16_t addr;  // global address, or offset for per-axis registers
+  bool per_axis;
+  Access access;
+  const char* doc;
+};
+
+constexpr std::array<RegDef, 31> REGS = {{
+    {"ID", reg::ID, false, Access::R, "0x4D43 (\"MC\") << 16 | protocol version"},
+    {"INFO", reg::INFO, false, Access::R, "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version"},
+    {"CLK_HZ", reg::CLK_HZ, false, Access::R, "clock frequency, Hz"},
+    {"BAUD", reg::BAUD, false, Access::R, "UART rate, bit/s"},
+    {"STATUS", reg::STATUS, false, Access::R,
+     "[0] armed, [1] e-stop input, [2] interpolator busy, [3] underrun, [4] queue overflow, "
+     "[10:8] limit inputs, [14:12] drive enables, [18:16] PID enables"},
+    {"FAULT", reg::FAULT, false, Access::RWL,
+     "latched faults, write 1 to clear: [0] watchdog, [1] e-stop, [6:4] limit, [10:8] following "
+     "error, [14:12] encoder"},
+    {"CTRL", reg::CTRL, false, Access::RW, "[0] arm the drives (cleared by a fault), [1] hold the feed"},
+    {"WDOG", reg::WDOG, false, Access::RW, "watchdog period, clock cycles [23:0] (reset: CLK_HZ/10)"},
+    {"SAFETY", reg::SAFETY, false, Access::RW,
+     "[2:0] limit enables, [3] e-stop enable, [6:4] limit active low, [7] e-stop active low (reset 0x0F)"},
+    {"TLM", reg::TLM, false, Access::RW, "[15:0] telemetry decimation (0 off), [18:16] axes"},
+    {"LINK_CRC", reg::LINK_CRC, false, Access::R,
+     "[15:0] frames with a bad CRC, [31:16] framing errors (length, truncated, busy)"},
+    {"LINK_CMD", reg::LINK_CMD, false, Access::R, "[15:0] refused frames (NAK), [31:16] duplicates"},
+    {"LINK_JUNK", reg::LINK_JUNK, false, Access::R, "[15:0] bytes skipped looking for SYNC"},
+    {"IP_CTRL", reg::IP_CTRL, false, Access::RW,
+     "strobes: [0] abort, [1] clear flags, [2] set position from IP_SET_X..Z"},
+    {"IP_STAT", reg::IP_STAT, false, Access::R,
+     "[FIFO_AW:0] words queued, [16] busy, [17] underrun, [18] overflow"},
+    {"IP_SEGS", reg::IP_SEGS, false, Access::R, "[15:0] segments completed"},
+    {"IP_SET_X", reg::IP_SET_X, false, Access::RW, "position IP_CTRL.set loads, counts"},
+    {"IP_SET_Y", reg::IP_SET_Y, false, Access::RW, "position IP_CTRL.set loads, counts"},
+    {"IP_SET_Z", reg::IP_SET_Z, false, Access::RW, "position IP_CTRL.set loads, counts"},
+    {"HW_POS", reg::HW_POS, false, Access::RWL, "handwheel position, counts; write loads"},
+    {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks, [8] reverse"},
+    {"TLM_HDR", reg::TLM_HDR, false, Access::R, "[15:0] PID sample count, [31:16] FAULT"},
+    {"POS", reg::AX_POS, true, Access::RWL,
+     "encoder position at the last sample, counts; write loads the counter"},
+    {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW, "[7:0] filter clocks, [8] reverse, [9] index clears"},
+    {"IDX", reg::AX_IDX, true, Access::RWL, "index position latched, counts; write [0] arm, [1] disarm"},
+    {"ENC_STAT", reg::AX_ENC_STAT, true, Access::RWL,
+     "[15:0] encoder errors, [16] error, [17] index armed, [18] index seen; write [0] clears errors"},
+    {"CMD", reg::AX_CMD, true, Access::R, "command at the last sample, counts"},
+    {"ERR", reg::AX_ERR, true, Access::R, "PID error at the last sample, counts"},
+    {"OUT", reg::AX_OUT, true, Access::R,
+     "[15:0] PID output, [16] saturated, [17] PID enabled, [18] drive enabled"},
+    {"DRV", reg::AX_DRV, true, Access::RWL,
+     "read: [15:0] drive value applied, [16] override on; write: [15:0] value, [16] override"},
+    {"FERR", reg::AX_FERR, true, Access::RW, "following-error limit, counts [15:0] (0 off)"},
+}};
+
+// Telemetry payload: TLM_HDR, then for each axis in TLM.axes (lowest first)
+// these registers' values, one 32-bit word each.
+constexpr std::array<uint16_t, 4> TLM_AXIS_WORDS = {reg::AX_POS, reg::AX_CMD, reg::AX_ERR, reg::AX_OUT};
+
+}  // namespace mc::board

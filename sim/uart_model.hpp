@@ -1,0 +1,109 @@
+// Bit-level UART (8N1) models for a clocked simulation: one drives a line, the
+// other samples one, both advanced one clock at a time by the caller. They
+// know nothing of the simulator, so they bridge anything that moves bytes
+// (a testbench, a pseudo-terminal) to the pins of a Verilated board.
+//
+//   UartSender tx(clocks_per_bit);  UartReceiver rx(clocks_per_bit);
+//   tx.send(bytes);
+//   each clock: top->RX = tx.pin(); eval; rx.clock(top->TX); tx.clock();
+//               if (rx.has_byte()) use(rx.take());
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <stdexcept>
+#include <vector>
+
+namespace mc::sim {
+
+// Clocks per bit, rounded as the RTL rounds it (uart_rx.v).
+constexpr int uart_clocks_per_bit(long clk_hz, long baud) {
+  return int((clk_hz + baud / 2) / baud);
+}
+
+class UartSender {
+ public:
+  explicit UartSender(int clocks_per_bit) : cpb_(clocks_per_bit) {
+    if (cpb_ < 2) throw std::invalid_argument("UartSender: clocks_per_bit must be at least 2");
+  }
+  void send(const std::vector<uint8_t>& bytes) { q_.insert(q_.end(), bytes.begin(), bytes.end()); }
+  void send(uint8_t b) { q_.push_back(b); }
+  // The line level in this clock (idle high).
+  bool pin() const { return level_; }
+  // Nothing queued and the line idle.
+  bool idle() const { return q_.empty() && bit_ < 0; }
+  // Advance one clock.
+  void clock() {
+    if (bit_ < 0) {
+      if (q_.empty()) return;
+      cur_ = q_.front();
+      q_.pop_front();
+      bit_ = 0;
+      cnt_ = 0;
+    }
+    // Bit 0 start, 1..8 data LSB first, 9 stop.
+    level_ = bit_ == 0 ? false : bit_ == 9 ? true : ((cur_ >> (bit_ - 1)) & 1);
+    if (++cnt_ == cpb_) {
+      cnt_ = 0;
+      if (++bit_ == 10) bit_ = -1;
+    }
+  }
+
+ private:
+  int cpb_;
+  std::deque<uint8_t> q_;
+  uint8_t cur_ = 0;
+  int bit_ = -1, cnt_ = 0;
+  bool level_ = true;
+};
+
+class UartReceiver {
+ public:
+  explicit UartReceiver(int clocks_per_bit) : cpb_(clocks_per_bit) {
+    if (cpb_ < 2) throw std::invalid_argument("UartReceiver: clocks_per_bit must be at least 2");
+  }
+  // Sample the line in this clock.
+  void clock(bool level) {
+    if (bit_ < 0) {
+      if (!level) {
+        bit_ = 0;
+        cnt_ = cpb_ / 2;  // to the middle of the start bit
+      }
+      return;
+    }
+    if (--cnt_ > 0) return;
+    cnt_ = cpb_;
+    if (bit_ == 0) {
+      if (level)
+        bit_ = -1;  // a glitch, not a start bit
+      else
+        ++bit_;
+    } else if (bit_ <= 8) {
+      sh_ = uint8_t((sh_ >> 1) | (level ? 0x80 : 0));
+      ++bit_;
+    } else {
+      if (level)
+        out_.push_back(sh_);
+      else
+        ++framing_errors_;
+      bit_ = -1;
+    }
+  }
+  bool has_byte() const { return !out_.empty(); }
+  uint8_t take() {
+    const uint8_t b = out_.front();
+    out_.pop_front();
+    return b;
+  }
+  bool busy() const { return bit_ >= 0; }
+  uint64_t framing_errors() const { return framing_errors_; }
+
+ private:
+  int cpb_;
+  int bit_ = -1, cnt_ = 0;
+  uint8_t sh_ = 0;
+  std::deque<uint8_t> out_;
+  uint64_t framing_errors_ = 0;
+};
+
+}  // namespace mc::sim

@@ -1,0 +1,124 @@
+// The Verilated iCEBreaker top (rtl/motioncore_icebreaker.v) with a host on
+// its UART pins: frames from host/protocol, bits from sim/uart_model. Every
+// clock it moves the host's line, samples the board's, and decodes what the
+// board sends; replies and telemetry frames are kept apart.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "Vmotioncore_icebreaker.h"
+#include "board_regs.hpp"
+#include "protocol.hpp"
+#include "uart_model.hpp"
+#include "vl_ports.hpp"
+
+namespace mc::test {
+
+namespace bp = board::proto;
+namespace br = board::reg;
+namespace bb = board::bits;
+namespace hp = host::proto;
+
+constexpr long kClkHz = 12'000'000;
+constexpr long kBaud = 1'000'000;
+constexpr int kCpb = sim::uart_clocks_per_bit(kClkHz, kBaud);
+// Clocks the host waits for a reply: a frame of 58 bytes (telemetry) may be
+// in front of it, plus the reply and slack.
+constexpr long kReplyTimeout = 80L * 10 * kCpb;
+// The board drops a frame stalled this long.
+constexpr long kByteTimeout = kClkHz / 1'000'000 * bp::BYTE_TIMEOUT_US;
+
+class BoardTb {
+ public:
+  explicit BoardTb(uint32_t seed = 1)
+      : ctx_(random_context(seed)), top_(new Vmotioncore_icebreaker(ctx_.get())) {
+    top_->CLK = 0;
+    top_->RX = 1;
+    top_->BTN_N = 1;
+    top_->ESTOP = 0;
+    top_->X_LIM = top_->Y_LIM = top_->Z_LIM = 0;
+    top_->X_ENC_A = top_->X_ENC_B = top_->X_ENC_Z = 0;
+    top_->Y_ENC_A = top_->Y_ENC_B = top_->Y_ENC_Z = 0;
+    top_->Z_ENC_A = top_->Z_ENC_B = top_->Z_ENC_Z = 0;
+    top_->HW_A = top_->HW_B = 0;
+    top_->eval();
+    run(64);  // power-on reset and the PID's state clear
+  }
+  ~BoardTb() { top_->final(); }
+
+  Vmotioncore_icebreaker& pins() { return *top_; }
+  uint64_t cycles() const { return cycles_; }
+
+  // One clock: host line, board edge, board line.
+  void clock() {
+    top_->RX = tx_.pin();
+    top_->CLK = 1;
+    top_->eval();
+    top_->CLK = 0;
+    top_->eval();
+    rx_.clock(top_->TX);
+    tx_.clock();
+    while (rx_.has_byte()) {
+      hp::Frame f;
+      if (dec_.push(rx_.take(), f)) (hp::is_telemetry(f) ? tlm_ : replies_).push_back(std::move(f));
+    }
+    ++cycles_;
+  }
+  void run(long n) {
+    for (long i = 0; i < n; ++i) clock();
+  }
+
+  // Sends raw bytes and waits until they have left the host's line.
+  void send_raw(const hp::Bytes& b) {
+    tx_.send(b);
+    while (!tx_.idle()) clock();
+  }
+  // Sends a frame; returns the reply to it, or nothing after the timeout.
+  std::optional<hp::Reply> transact(const hp::Frame& req, long timeout = kReplyTimeout) {
+    replies_.clear();
+    send_raw(hp::encode(req));
+    for (long i = 0; i < timeout; ++i) {
+      clock();
+      if (!replies_.empty()) {
+        hp::Reply r = hp::parse_reply(replies_.front());
+        replies_.clear();
+        EXPECT_TRUE(hp::answers(r, req)) << "reply to seq " << int(r.seq) << " cmd " << int(r.cmd);
+        return r;
+      }
+    }
+    return std::nullopt;
+  }
+  // Register access that must succeed.
+  uint32_t read(uint16_t addr) {
+    auto r = transact(hp::read(seq_.next(), addr));
+    EXPECT_TRUE(r && r->status == bp::ST_OK)
+        << "read 0x" << std::hex << addr << " status " << (r ? int(r->status) : -1);
+    return r ? r->value : 0;
+  }
+  void write(uint16_t addr, uint32_t v) {
+    auto r = transact(hp::write(seq_.next(), addr, v));
+    EXPECT_TRUE(r && r->status == bp::ST_OK)
+        << "write 0x" << std::hex << addr << " status " << (r ? int(r->status) : -1);
+  }
+  uint8_t next_seq() { return seq_.next(); }
+
+  std::vector<hp::Frame>& telemetry() { return tlm_; }
+  const hp::DecodeStats& host_rx_stats() const { return dec_.stats(); }
+
+ private:
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<Vmotioncore_icebreaker> top_;
+  sim::UartSender tx_{kCpb};
+  sim::UartReceiver rx_{kCpb};
+  hp::Decoder dec_;
+  hp::SeqGen seq_{1};
+  std::vector<hp::Frame> replies_, tlm_;
+  uint64_t cycles_ = 0;
+};
+
+}  // namespace mc::test

@@ -1,0 +1,371 @@
+// The board top, Verilated, with a host speaking the protocol bit by bit on
+// its UART pins (tests/board_harness.hpp): register access, bad frames,
+// duplicates, the watchdog, every fault source, telemetry against the PID
+// twin, and segments running through the interpolator into the PID.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <random>
+
+#include "board_harness.hpp"
+#include "interp_plan.hpp"
+#include "pid_core.hpp"
+
+namespace mc::test {
+namespace {
+
+uint16_t ax(int a, uint16_t off) {
+  return br::axis(a, off);
+}
+
+TEST(BoardRtl, IdentityAndRegisterRoundTrips) {
+  BoardTb tb;
+  EXPECT_EQ(tb.read(br::ID), bb::ID_MAGIC | bp::VERSION);
+  EXPECT_EQ(tb.read(br::INFO),
+            3u | 9u << bb::INFO_FIFO_AW_LSB | uint32_t(bp::VERSION) << bb::INFO_VERSION_LSB);
+  EXPECT_EQ(tb.read(br::CLK_HZ), uint32_t(kClkHz));
+  EXPECT_EQ(tb.read(br::BAUD), uint32_t(kBaud));
+  // Reset values of the writable registers.
+  EXPECT_EQ(tb.read(br::WDOG), board::wdog_default(uint32_t(kClkHz)));
+  EXPECT_EQ(tb.read(br::SAFETY), bb::SAFETY_DEFAULT);
+  EXPECT_EQ(tb.read(br::FAULT), 0u);
+  EXPECT_EQ(tb.read(br::STATUS) & (1u << bb::ST_ARMED), 0u) << "the drives must start disarmed";
+
+  std::mt19937 rng(7);
+  for (uint16_t a : {br::WDOG, br::TLM, br::IP_SET_X, br::IP_SET_Y, br::IP_SET_Z, br::HW_CFG}) {
+    const uint32_t v = uint32_t(rng());
+    tb.write(a, v);
+    EXPECT_EQ(tb.read(a), v) << std::hex << a;
+  }
+  tb.write(br::TLM, 0);
+  for (int a = 0; a < 3; ++a)
+    for (uint16_t off : {br::AX_ENC_CFG, br::AX_FERR}) {
+      const uint32_t v = uint32_t(rng() & 0xFFFF);
+      tb.write(ax(a, off), v);
+      EXPECT_EQ(tb.read(ax(a, off)), v);
+    }
+  // PID registers pass through to pid_core.
+  tb.write(pid_reg::addr(1, pid_reg::KP), 0x05123456);
+  EXPECT_EQ(tb.read(pid_reg::addr(1, pid_reg::KP)), 0x05123456u);
+  EXPECT_EQ(tb.read(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_NAXES)), 3u);
+  // Loading an encoder position shows at the next sample.
+  tb.write(ax(2, br::AX_POS), 12345);
+  tb.run(200);
+  EXPECT_EQ(tb.read(ax(2, br::AX_POS)), 12345u);
+  tb.write(br::HW_POS, uint32_t(-77));
+  EXPECT_EQ(tb.read(br::HW_POS), uint32_t(-77));
+}
+
+TEST(BoardRtl, RefusedCommandsAreCountedAndNotApplied) {
+  BoardTb tb;
+  const uint32_t wdog = tb.read(br::WDOG);
+  struct Case {
+    hp::Frame f;
+    uint8_t status;
+  };
+  std::vector<Case> cases = {
+      {hp::read(tb.next_seq(), 0x0180), bp::ST_BAD_REG},                   // past the globals
+      {hp::read(tb.next_seq(), br::axis(3, br::AX_POS)), bp::ST_BAD_REG},  // no fourth axis
+      {hp::read(tb.next_seq(), br::axis(0, br::AX_END)), bp::ST_BAD_REG},
+      {hp::read(tb.next_seq(), 0x7000), bp::ST_BAD_REG},
+      {hp::read(tb.next_seq(), pid_reg::addr(3, pid_reg::KP)), bp::ST_BAD_REG},
+      {hp::write(tb.next_seq(), br::ID, 1), bp::ST_BAD_REG},  // read-only
+      {hp::write(tb.next_seq(), br::axis(0, br::AX_CMD), 1), bp::ST_BAD_REG},
+      {hp::Frame{tb.next_seq(), bp::CMD_READ, {0x07, 0x01, 0x00}}, bp::ST_BAD_LEN},
+      {hp::Frame{tb.next_seq(), bp::CMD_WRITE, {0x07, 0x01, 0, 0, 0}}, bp::ST_BAD_LEN},
+      {hp::Frame{tb.next_seq(), bp::CMD_SEG, hp::Bytes(36, 0)}, bp::ST_BAD_LEN},
+      {hp::Frame{tb.next_seq(), 0x42, {}}, bp::ST_BAD_CMD},
+  };
+  for (const auto& c : cases) {
+    auto r = tb.transact(c.f);
+    ASSERT_TRUE(r) << "no reply to cmd " << int(c.f.cmd);
+    EXPECT_EQ(r->status, c.status) << "cmd " << int(c.f.cmd);
+  }
+  EXPECT_EQ(tb.read(br::LINK_CMD) & 0xFFFF, cases.size());
+  EXPECT_EQ(tb.read(br::WDOG), wdog);
+  EXPECT_EQ(tb.read(br::IP_STAT) & 0x3FF, 0u);
+}
+
+TEST(BoardRtl, BadFramesAreDroppedAndCounted) {
+  BoardTb tb;
+  const uint32_t wdog0 = tb.read(br::WDOG);
+  std::mt19937 rng(11);
+  int crc_bad = 0, framing = 0, junk = 0;
+  // A corrupted byte anywhere after SYNC: no reply, nothing applied.
+  for (int i = 1; i < 12; ++i) {
+    auto b = hp::encode(hp::write(tb.next_seq(), br::WDOG, 1000));
+    if (i == 1) continue;  // LEN: changes the framing, tested below
+    b[size_t(i)] ^= uint8_t(1 + rng() % 255);
+    tb.send_raw(b);
+    tb.run(kByteTimeout + 200);  // a frame cut short by the change ends by timeout
+    ++crc_bad;
+  }
+  // Truncated frames: the board waits BYTE_TIMEOUT_US, then drops them.
+  for (int cut = 1; cut < 12; ++cut) {
+    auto b = hp::encode(hp::write(tb.next_seq(), br::WDOG, 2000));
+    b.resize(size_t(cut));
+    tb.send_raw(b);
+    tb.run(kByteTimeout + 200);
+    if (cut > 1)
+      ++framing;  // a lone SYNC is still waiting for LEN
+    else
+      ++framing;
+  }
+  // LEN beyond MAX_LEN.
+  tb.send_raw({bp::SYNC, uint8_t(bp::MAX_LEN + 1), 0, 0});
+  tb.run(kByteTimeout + 200);
+  ++framing;
+  junk += 2;  // the hunt for SYNC resumes right after LEN
+  // Garbage without SYNC.
+  hp::Bytes g;
+  for (int i = 0; i < 50; ++i) {
+    uint8_t x = uint8_t(rng());
+    if (x == bp::SYNC) x = 0;
+    g.push_back(x);
+  }
+  tb.send_raw(g);
+  junk += int(g.size());
+  tb.run(200);
+  EXPECT_TRUE(tb.telemetry().empty());
+  EXPECT_EQ(tb.read(br::WDOG), wdog0) << "a bad frame was applied";
+  const uint32_t link = tb.read(br::LINK_CRC);
+  // Corrupting SEQ, CMD, payload or CRC bytes always breaks the CRC check.
+  // (A corrupted byte that turns into a SYNC is not special: SYNC is only
+  // looked for between frames.)
+  EXPECT_EQ(int(link & 0xFFFF), crc_bad);
+  EXPECT_EQ(int(link >> 16), framing);
+  EXPECT_EQ(int(tb.read(br::LINK_JUNK)), junk);
+  // The link still works.
+  tb.write(br::WDOG, 4321);
+  EXPECT_EQ(tb.read(br::WDOG), 4321u);
+}
+
+// Three dwell segments of a long duration: the first is loaded into the
+// interpolator, two stay queued.
+std::vector<seg::Words> dwells(int n) {
+  std::vector<seg::Words> v;
+  for (int i = 0; i < n; ++i) v.push_back(seg::pack(host::plan_dwell({0, 0, 0}, 1.0).seg));
+  return v;
+}
+
+TEST(BoardRtl, DuplicateFrameIsAnsweredButNotAppliedTwice) {
+  BoardTb tb;
+  const auto req = hp::segments(tb.next_seq(), dwells(3));
+  auto r1 = tb.transact(req);
+  ASSERT_TRUE(r1);
+  EXPECT_EQ(r1->status, bp::ST_OK);
+  // The host missed the reply and sends the very same frame again.
+  auto r2 = tb.transact(req);
+  ASSERT_TRUE(r2);
+  EXPECT_EQ(r2->status, bp::ST_DUP);
+  tb.run(100);
+  // One segment loaded into the interpolator, two queued: three, not six.
+  EXPECT_EQ(tb.read(br::IP_STAT) & 0x3FF, 2u * seg::SEG_WORDS);
+  // Same for a write: answered, counted, not applied.
+  const auto w = hp::write(tb.next_seq(), br::IP_SET_X, 5);
+  EXPECT_EQ(tb.transact(w)->status, bp::ST_OK);
+  tb.write(br::IP_SET_X, 6);
+  EXPECT_EQ(tb.transact(w)->status, bp::ST_OK) << "not the last SEQ any more: a new command";
+  EXPECT_EQ(tb.transact(w)->status, bp::ST_DUP);
+  EXPECT_EQ(tb.read(br::IP_SET_X), 5u);
+  EXPECT_EQ(tb.read(br::LINK_CMD) >> 16, 2u);
+  // PING starts a session: the last SEQ is forgotten.
+  EXPECT_EQ(tb.transact(hp::ping(0))->status, bp::ST_OK);
+  EXPECT_EQ(tb.transact(w)->status, bp::ST_OK);
+}
+
+// Arms the board with an override drive on axis 0, so its EN pin shows
+// whether the drive is allowed.
+void arm_with_drive(BoardTb& tb) {
+  tb.write(ax(0, br::AX_DRV), 1u << bb::D_OVR | 0x4000);
+  tb.write(br::CTRL, 1u << bb::C_ARM);
+  tb.run(10);
+  ASSERT_TRUE(tb.read(br::STATUS) & (1u << bb::ST_ARMED));
+  ASSERT_TRUE(tb.pins().X_EN);
+}
+
+void expect_fault_then_clear(BoardTb& tb, uint32_t bit, const char* what) {
+  SCOPED_TRACE(what);
+  EXPECT_FALSE(tb.pins().X_EN) << "the drive must be off";
+  EXPECT_EQ(tb.read(br::FAULT), bit);
+  EXPECT_FALSE(tb.read(br::STATUS) & (1u << bb::ST_ARMED));
+  tb.write(br::CTRL, 1u << bb::C_ARM);  // refused while the fault is latched
+  EXPECT_FALSE(tb.pins().X_EN);
+}
+
+TEST(BoardRtl, WatchdogDisablesTheDrivesWhenTheHostGoesQuiet) {
+  BoardTb tb;
+  const uint32_t period = 30000;
+  tb.write(br::WDOG, period);
+  arm_with_drive(tb);
+  // Frames keep it alive.
+  for (int i = 0; i < 5; ++i) {
+    tb.run(period / 2);
+    tb.transact(hp::ping(tb.next_seq()));
+  }
+  EXPECT_TRUE(tb.pins().X_EN);
+  EXPECT_EQ(tb.read(br::FAULT), 0u);
+  // Quiet: the drive goes off within the period.
+  long n = 0;
+  while (tb.pins().X_EN && n < 2L * period) {
+    tb.clock();
+    ++n;
+  }
+  EXPECT_LE(n, long(period));
+  EXPECT_GT(n, long(period) - 2000);
+  expect_fault_then_clear(tb, 1u << bb::F_WDOG, "watchdog");
+  tb.write(br::FAULT, 1u << bb::F_WDOG);
+  EXPECT_EQ(tb.read(br::FAULT), 0u);
+  EXPECT_FALSE(tb.pins().X_EN) << "clearing a fault does not re-arm";
+  tb.write(br::CTRL, 1u << bb::C_ARM);
+  tb.run(5);
+  EXPECT_TRUE(tb.pins().X_EN);
+}
+
+TEST(BoardRtl, EveryFaultSourceLatchesAndClears) {
+  BoardTb tb;
+  tb.write(br::WDOG, (1u << 24) - 1);
+  struct Src {
+    const char* name;
+    uint32_t bit;
+    std::function<void(bool)> set;
+  };
+  auto& p = tb.pins();
+  std::vector<Src> srcs = {
+      {"e-stop", 1u << bb::F_ESTOP, [&](bool on) { p.ESTOP = on; }},
+      {"button", 1u << bb::F_ESTOP, [&](bool on) { p.BTN_N = !on; }},
+      {"limit X", 1u << (bb::F_LIMIT_LSB + 0), [&](bool on) { p.X_LIM = on; }},
+      {"limit Y", 1u << (bb::F_LIMIT_LSB + 1), [&](bool on) { p.Y_LIM = on; }},
+      {"limit Z", 1u << (bb::F_LIMIT_LSB + 2), [&](bool on) { p.Z_LIM = on; }},
+  };
+  for (auto& s : srcs) {
+    arm_with_drive(tb);
+    s.set(true);
+    tb.run(10);
+    expect_fault_then_clear(tb, s.bit, s.name);
+    tb.write(br::FAULT, s.bit);  // still active: latches again
+    EXPECT_EQ(tb.read(br::FAULT), s.bit) << s.name;
+    s.set(false);
+    tb.run(10);
+    tb.write(br::FAULT, s.bit);
+    EXPECT_EQ(tb.read(br::FAULT), 0u) << s.name;
+  }
+  // A disabled limit input is ignored.
+  tb.write(br::SAFETY, bb::SAFETY_DEFAULT & ~(1u << (bb::S_LIM_EN_LSB + 1)));
+  arm_with_drive(tb);
+  p.Y_LIM = 1;
+  tb.run(10);
+  EXPECT_TRUE(p.X_EN);
+  p.Y_LIM = 0;
+  tb.write(br::SAFETY, bb::SAFETY_DEFAULT);
+
+  // Encoder: A and B change in the same clock.
+  arm_with_drive(tb);
+  p.Y_ENC_A = 1;
+  p.Y_ENC_B = 1;
+  tb.run(10);
+  expect_fault_then_clear(tb, 1u << (bb::F_ENC_LSB + 1), "encoder Y");
+  EXPECT_TRUE(tb.read(ax(1, br::AX_ENC_STAT)) & (1u << bb::ES_ERR));
+  tb.write(br::FAULT, 1u << (bb::F_ENC_LSB + 1));  // also clears the decoder's flag
+  EXPECT_EQ(tb.read(br::FAULT), 0u);
+  EXPECT_FALSE(tb.read(ax(1, br::AX_ENC_STAT)) & (1u << bb::ES_ERR));
+
+  // Following error: command 100 counts away from the encoder.
+  tb.write(ax(2, br::AX_FERR), 100);
+  tb.write(br::IP_SET_Z, 100);
+  tb.write(br::IP_CTRL, 1u << bb::I_SET);
+  tb.run(200);
+  arm_with_drive(tb);  // |100| is not above 100
+  tb.write(br::IP_SET_Z, uint32_t(-101));
+  tb.write(br::IP_CTRL, 1u << bb::I_SET);
+  tb.run(200);
+  expect_fault_then_clear(tb, 1u << (bb::F_FERR_LSB + 2), "following error Z");
+  tb.write(ax(2, br::AX_FERR), 0);  // off
+  tb.write(br::FAULT, 1u << (bb::F_FERR_LSB + 2));
+  tb.run(200);
+  EXPECT_EQ(tb.read(br::FAULT), 0u);
+}
+
+// Telemetry every sample, compared with the PID twin fed the sampled command
+// and feedback; the command comes from segments the host planned and queued,
+// run end to end through the interpolator.
+TEST(BoardRtl, SegmentsRunIntoThePidAndTelemetryMatchesTheTwin) {
+  BoardTb tb;
+  constexpr int kTs = 10000;  // cycles: a 3-axis frame (58 bytes) and a reply fit in one period
+  tb.write(br::WDOG, (1u << 24) - 1);
+  tb.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), kTs);
+  PidCore<3> twin;
+  twin.reset();
+  twin.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), kTs);
+  // Gains: P, I and D on every axis (words: [29:24] shift, [23:0] mantissa).
+  const uint32_t words[][2] = {{pid_reg::KP, 0x0C400000},   {pid_reg::KI, 0x10300000},
+                               {pid_reg::KD_A, 0x01700000}, {pid_reg::KD_B, 0x0A200000},
+                               {pid_reg::OLIM, 20000},      {pid_reg::ILIM, 10000}};
+  for (int a = 0; a < 3; ++a) {
+    for (const auto& w : words) {
+      tb.write(pid_reg::addr(uint8_t(a), uint8_t(w[0])), w[1]);
+      twin.write(pid_reg::addr(uint8_t(a), uint8_t(w[0])), w[1]);
+    }
+    tb.write(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1);
+    twin.write(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1);
+  }
+  tb.write(br::TLM, 1u << bb::T_DECIM_LSB | 7u << bb::T_AXES_LSB);
+  tb.run(2 * kTs);
+  tb.telemetry().clear();
+
+  // Two lines and a dwell, planned on the host.
+  const host::Vec3 p0{0, 0, 0}, p1{300, -120, 40}, p2{100, 80, 40};
+  std::vector<seg::Words> segs = {seg::pack(host::plan_line(p0, p1, 20000).seg),
+                                  seg::pack(host::plan_line(p1, p2, 30000).seg),
+                                  seg::pack(host::plan_dwell(p2, 0.002).seg)};
+  segs.back()[seg::W_HDR] |= 1u << seg::H_LAST;
+  auto r = tb.transact(hp::segments(tb.next_seq(), segs));
+  ASSERT_TRUE(r && r->status == bp::ST_OK);
+  tb.write(br::CTRL, 1u << bb::C_ARM);  // the feed runs only while armed
+
+  // Run until the interpolator is idle with all three done, then a little.
+  for (int i = 0; i < 200 && (tb.read(br::IP_SEGS) < 3 || (tb.read(br::IP_STAT) & (1u << bb::IS_BUSY))); ++i)
+    tb.run(20 * kTs);
+  tb.run(3 * kTs);
+  EXPECT_EQ(tb.read(br::IP_SEGS), 3u);
+  EXPECT_FALSE(tb.read(br::IP_STAT) & (1u << bb::IS_UNDERRUN));
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), p2[size_t(a)]) << "axis " << a;
+
+  // Every telemetry frame: consecutive samples, the twin agrees bit for bit.
+  const auto& frames = tb.telemetry();
+  ASSERT_GT(frames.size(), 50u);
+  int moved = 0, nonzero_u = 0;
+  std::optional<uint16_t> last;
+  int32_t prev_cmd[3] = {};
+  for (const auto& f : frames) {
+    const auto t = hp::parse_telemetry(f, 7);
+    if (last) {
+      ASSERT_EQ(uint16_t(*last + 1), t.sample) << "a telemetry frame was skipped";
+    }
+    last = t.sample;
+    int32_t cmd[3], fb[3];
+    for (int a = 0; a < 3; ++a) {
+      cmd[a] = t.axes[size_t(a)].cmd;
+      fb[a] = t.axes[size_t(a)].pos;
+      EXPECT_EQ(fb[a], 0) << "the encoders do not move";
+      EXPECT_LE(std::abs(cmd[a] - prev_cmd[a]), kTs) << "the command jumped";
+      moved += cmd[a] != prev_cmd[a];
+      prev_cmd[a] = cmd[a];
+    }
+    twin.sample(cmd, fb);
+    for (int a = 0; a < 3; ++a) {
+      const auto& s = t.axes[size_t(a)];
+      ASSERT_EQ(s.u, twin.u(a)) << "sample " << t.sample << " axis " << a;
+      ASSERT_EQ(s.err, twin.err(a)) << "sample " << t.sample << " axis " << a;
+      ASSERT_EQ(s.sat, twin.sat(a)) << "sample " << t.sample << " axis " << a;
+      EXPECT_TRUE(s.pid_en);
+      nonzero_u += s.u != 0;
+    }
+  }
+  EXPECT_GT(moved, 20);
+  EXPECT_GT(nonzero_u, 20);
+  EXPECT_EQ(tb.host_rx_stats().crc, 0u);
+}
+
+}  // namespace
+}  // namespace mc::test
