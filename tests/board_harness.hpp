@@ -15,7 +15,7 @@
 #include "board_regs.hpp"
 #include "protocol.hpp"
 #include "uart_model.hpp"
-#include "vl_ports.hpp"
+#include "vl_context.hpp"
 
 namespace mc::test {
 
@@ -36,7 +36,7 @@ constexpr long kByteTimeout = kClkHz / 1'000'000 * bp::BYTE_TIMEOUT_US;
 class BoardTb {
  public:
   explicit BoardTb(uint32_t seed = 1)
-      : ctx_(random_context(seed)), top_(new Vmotioncore_icebreaker(ctx_.get())) {
+      : ctx_(random_context(seed)), top_(std::make_unique<Vmotioncore_icebreaker>(ctx_.get())) {
     top_->CLK = 0;
     top_->RX = 1;
     top_->BTN_N = 1;
