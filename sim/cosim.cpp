@@ -675,19 +675,17 @@ Child::Child(const RunSpec& spec) : name_(spec.platform.name + "/" + spec.scenar
       m.append(reinterpret_cast<const char*>(&f), sizeof f);
       write_all(fd, m);
     };
+    const auto message = [](char kind, const std::string& body) {
+      std::string m(1, kind);
+      const uint64_t n = body.size();
+      m.append(reinterpret_cast<const char*>(&n), sizeof n);
+      return m + body;
+    };
     std::string out;
     try {
-      const std::string body = serialize(run(s));
-      out = 'R';
-      const uint64_t n = body.size();
-      out.append(reinterpret_cast<const char*>(&n), sizeof n);
-      out += body;
+      out = message('R', serialize(run(s)));
     } catch (const std::exception& e) {
-      const std::string msg = e.what();
-      out = 'E';
-      const uint64_t n = msg.size();
-      out.append(reinterpret_cast<const char*>(&n), sizeof n);
-      out += msg;
+      out = message('E', e.what());
     }
     write_all(fds[1], out);
     ::close(fds[1]);
