@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -41,7 +42,7 @@ class Progress {
       return;
     }
     const double f = total ? (done + running) / total : 1;
-    const int width = 40, fill = int(f * width + 0.5);
+    const int width = 40, fill = int(std::lround(f * width));
     std::fprintf(stderr, "\r[%s%s] %3d%%  %d/%d runs  %-32s", std::string(size_t(fill), '#').c_str(),
                  std::string(size_t(width - fill), ' ').c_str(), int(f * 100), done, total, last.c_str());
     if (done == total) std::fprintf(stderr, "\n");

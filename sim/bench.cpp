@@ -75,6 +75,7 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
       running.emplace_back(i, std::make_unique<Child>(specs[i]));
     }
     std::vector<pollfd> fds;
+    fds.reserve(running.size());
     for (auto& [i, c] : running) fds.push_back({c->fd(), POLLIN, 0});
     if (::poll(fds.data(), fds.size(), 500) < 0 && errno != EINTR)
       throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
@@ -112,7 +113,9 @@ SC_MODULE(ClockedCore) {
   CoreIn in;
   uint64_t cycles = 0;
   SC_HAS_PROCESS(ClockedCore);
-  explicit ClockedCore(sc_core::sc_module_name n) : sc_core::sc_module(n) {
+  // SystemC's module naming takes the name by value.
+  explicit ClockedCore(sc_core::sc_module_name n)  // NOLINT(performance-unnecessary-value-param)
+      : sc_core::sc_module(n) {
     SC_METHOD(edge);
     sensitive << clk.pos();
     dont_initialize();
@@ -131,7 +134,9 @@ SC_MODULE(DecoupledCore) {
   uint64_t cycles = 0, quantum = 1200;
   double clock_hz = 12e6;
   SC_HAS_PROCESS(DecoupledCore);
-  explicit DecoupledCore(sc_core::sc_module_name n) : sc_core::sc_module(n) {
+  // SystemC's module naming takes the name by value.
+  explicit DecoupledCore(sc_core::sc_module_name n)  // NOLINT(performance-unnecessary-value-param)
+      : sc_core::sc_module(n) {
     SC_THREAD(run);
   }
   void run() {

@@ -511,7 +511,9 @@ SC_MODULE(SystemModel) {
   sc_core::sc_event wake_ev, woke_ev;
 
   SC_HAS_PROCESS(SystemModel);
-  SystemModel(sc_core::sc_module_name nm, Machine & machine, const RunSpec& s)
+  // SystemC's module naming takes the name by value.
+  SystemModel(sc_core::sc_module_name nm,  // NOLINT(performance-unnecessary-value-param)
+              Machine & machine, const RunSpec& s)
       : sc_core::sc_module(nm), m(machine), spec(s) {
     quantum = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 / m.dt())));
     SC_THREAD(machine_proc);
