@@ -178,7 +178,8 @@ class MotionCore {
   // Fast-forward for long simulations: true when n clocks with these inputs
   // would change nothing but counters (no tick or sweep due, decoders
   // settled, interpolator idle, drive value unchanged); skip(in, n) then does
-  // them at once. The PWM pin ends as the last of those clocks leaves it.
+  // them at once (the inputs held are those quiet() was given). The PWM pin
+  // ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
     InterpIn ii;
@@ -193,7 +194,7 @@ class MotionCore {
     }
     return true;
   }
-  void skip(const In& in, uint32_t n) {
+  void skip(uint32_t n) {
     pid_.skip(n);
     ip_.skip(n);
     for (int a = 0; a < NAXES; ++a) {
@@ -201,7 +202,6 @@ class MotionCore {
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
-    (void)in;
   }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -53,21 +54,27 @@ class Progress {
   int shown_ = -1;
 };
 
+mc::sim::Engine parse_engine(const std::string& e) {
+  if (e != "rtl" && e != "twin") throw InputError("--engine", "'" + e + "'", "rtl or twin");
+  return e == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
+}
+
+// "same" or "tuned"; `both` also allows "both" (nullopt).
+std::optional<mc::sim::GainPolicy> parse_policy(const std::string& p, bool both) {
+  if (p == "same") return mc::sim::GainPolicy::Same;
+  if (p == "tuned") return mc::sim::GainPolicy::Tuned;
+  if (both && p == "both") return std::nullopt;
+  throw InputError("--policy", "'" + p + "'", both ? "same, tuned or both" : "same or tuned");
+}
+
 void bench_command(const BenchCli& c) {
   mc::sim::BenchOptions o;
   o.machine = mc::sim::machine_or_default(c.config);
   o.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
   o.out_dir = c.out;
   o.quick = c.quick;
-  if (c.engine != "rtl" && c.engine != "twin")
-    throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
-  o.engine = c.engine == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
-  if (c.policy == "same")
-    o.policies = {mc::sim::GainPolicy::Same};
-  else if (c.policy == "tuned")
-    o.policies = {mc::sim::GainPolicy::Tuned};
-  else if (c.policy != "both")
-    throw InputError("--policy", "'" + c.policy + "'", "same, tuned or both");
+  o.engine = parse_engine(c.engine);
+  if (const auto p = parse_policy(c.policy, true)) o.policies = {*p};
   if (c.jobs < 0) throw InputError("--jobs", std::to_string(c.jobs), "a positive number of processes");
   o.jobs = c.jobs ? c.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
   o.seed = c.seed;
@@ -113,12 +120,8 @@ void cosim_command(const CosimCli& c) {
   s.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
   s.platform = mc::sim::find_platform(s.machine, c.platform);
   s.scenario = mc::sim::find_scenario(c.scenario, c.quick);
-  if (c.engine != "rtl" && c.engine != "twin")
-    throw InputError("--engine", "'" + c.engine + "'", "rtl or twin");
-  s.engine = c.engine == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
-  if (c.policy != "same" && c.policy != "tuned")
-    throw InputError("--policy", "'" + c.policy + "'", "same or tuned");
-  s.policy = c.policy == "same" ? mc::sim::GainPolicy::Same : mc::sim::GainPolicy::Tuned;
+  s.engine = parse_engine(c.engine);
+  s.policy = *parse_policy(c.policy, false);
   if (!c.trace.empty() && (s.platform.host || s.engine != mc::sim::Engine::Rtl))
     throw InputError("--trace", "'" + c.trace + "'",
                      "an FPGA platform with --engine rtl (the waveform is the RTL's)");

@@ -435,7 +435,7 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     }
   if (std::count(scenario_order.begin(), scenario_order.end(), "circle")) {
     // The circle's radial error is microns on millimetres: magnify it.
-    const double r0 = bench_scenarios(o.quick)[3].size_m;
+    const double r0 = find_scenario("circle", o.quick).size_m;
     const double mag = 20;
     for (const char* pol : policies) {
       const fs::path png = dir / "plots" / (std::string("circle_xy_") + pol + ".png");

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "motion_core.hpp"
@@ -18,36 +19,36 @@ using CoreTwin = mc::MotionCore<kCoreAxes>;
 using CoreIn = CoreTwin::In;
 using CoreOut = CoreTwin::Out;
 
+// What a fast-forward skipped: the outputs of its first clock and the PWM
+// counter then, from which the drive over the skipped clocks follows.
+struct Skipped {
+  CoreOut first;
+  uint32_t pwm0 = 0;
+};
+
 class CoreModel {
  public:
   virtual ~CoreModel() = default;
-  // This clock's outputs (before its edge) for these inputs.
-  virtual CoreOut outputs(const CoreIn& in) = 0;
-  // The same, then the edge.
+  // This clock's outputs (before its edge) for these inputs, then the edge.
   virtual CoreOut cycle(const CoreIn& in) = 0;
   // n clocks with `in` held, at once, when that changes nothing but counters;
-  // false (and nothing done) otherwise. The RTL never skips.
-  virtual bool try_skip(const CoreIn& in, uint32_t n) = 0;
-  // The PWM counter's value in the current clock (drive models need its phase).
-  virtual uint32_t pwm_count() const = 0;
-  virtual const char* name() const = 0;
+  // nullopt (and nothing done) otherwise. The RTL never skips.
+  virtual std::optional<Skipped> try_skip(const CoreIn& in, uint32_t n) = 0;
 };
 
 class TwinCore final : public CoreModel {
  public:
-  CoreOut outputs(const CoreIn& in) override { return twin_.outputs(in.pid_we); }
   CoreOut cycle(const CoreIn& in) override {
     const CoreOut o = twin_.outputs(in.pid_we);
     twin_.clock(in);
     return o;
   }
-  bool try_skip(const CoreIn& in, uint32_t n) override {
-    if (!twin_.quiet(in, n)) return false;
-    twin_.skip(in, n);
-    return true;
+  std::optional<Skipped> try_skip(const CoreIn& in, uint32_t n) override {
+    if (!twin_.quiet(in, n)) return std::nullopt;
+    Skipped s{twin_.outputs(in.pid_we), twin_.pwm_count()};
+    twin_.skip(n);
+    return s;
   }
-  uint32_t pwm_count() const override { return twin_.pwm_count(); }
-  const char* name() const override { return "twin"; }
 
  private:
   CoreTwin twin_;

@@ -200,13 +200,7 @@ Command make_command(const MachineConfig& m, const Scenario& s) {
   return c;
 }
 
-// ---------------------------------------------------------------------------
-// Drive: the terminal voltage over one plant step from the core's outputs.
-struct DriveAccum {
-  double sum = 0;
-  void add(double v, uint32_t clocks) { sum += v * clocks; }
-};
-
+// The drive is the PWM pin itself rather than its average.
 bool switching(const DriveConfig& d) {
   return d.kind == DriveConfig::Kind::Pwm && d.pwm_switching;
 }
@@ -264,7 +258,7 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       host_[size_t(a)].wake(double(cmd_now_[a]), double(plant_[size_t(a)].encoder_count()));
       if (step_ >= start_step_) {
-        res_.sample_u[size_t(a)].push_back(int32_t(std::lround(host_[size_t(a)].output_at(1e300))));
+        res_.sample_u[size_t(a)].push_back(int32_t(std::lround(host_[size_t(a)].last_output())));
         if (a == 0) res_.sample_clock.push_back(step_ * k_);
       }
     }
@@ -277,8 +271,6 @@ class Machine {
   RunResult finish(double wall_s) {
     res_.sim_s = double(end_step_ - start_step_) * dt();
     res_.wall_s = wall_s;
-    const double cpm = counts_per_m(s_.machine.axes[0]);
-    (void)cpm;
     for (int a = 0; a < kCoreAxes; ++a)
       res_.follow[size_t(a)] = following_error(res_.t, res_.cmd_m[size_t(a)], res_.pos_m[size_t(a)]);
     const Scenario& sc = s_.scenario;
@@ -304,7 +296,7 @@ class Machine {
   void configure_core() {
     CoreIn in;
     in.rst = true;
-    for (int i = 0; i < 4; ++i) clock_core(in);
+    for (int i = 0; i < 4; ++i) core_->cycle(in);
     in.rst = false;
     std::vector<std::pair<uint8_t, uint32_t>> w;
     for (int a = 0; a < kCoreAxes; ++a) {
@@ -321,10 +313,8 @@ class Machine {
       in.pid_we = true;
       in.pid_waddr = addr;
       in.pid_wdata = data;
-      for (;;) {
-        const bool ready = core_->outputs(in).pid_wready;
-        clock_core(in);
-        if (ready) break;
+      // Taken in the clock whose outputs say the port is ready.
+      while (!core_->cycle(in).pid_wready) {
       }
     }
     in.pid_we = false;
@@ -333,12 +323,6 @@ class Machine {
       in.enc_filt[a] = 1;
     }
     in_ = in;
-  }
-
-  // Configuration clocks, before the plant runs: the axes are at rest.
-  void clock_core(const CoreIn& in) {
-    core_->cycle(in);
-    ++pre_clocks_;
   }
 
   // Encoder pins: the counts the plant reached at the start of the step are
@@ -403,10 +387,9 @@ class Machine {
       }
       start_command(in_, c);
       if (c >= settle && !pending_ && !commanding(c)) {
-        const CoreOut o = core_->outputs(in_);
-        const uint32_t p0 = core_->pwm_count(), n = k_ - c;
-        if (core_->try_skip(in_, n)) {
-          for (int a = 0; a < kCoreAxes; ++a) sum[a] += skipped_volts(a, o, p0, n);
+        const uint32_t n = k_ - c;
+        if (const auto sk = core_->try_skip(in_, n)) {
+          for (int a = 0; a < kCoreAxes; ++a) sum[a] += skipped_volts(a, sk->first, sk->pwm0, n);
           res_.clocks_skipped += n;
           break;
         }
@@ -490,7 +473,7 @@ class Machine {
   std::unique_ptr<CoreModel> core_;
   mc::InterpCore<9> gen_;
   CoreIn in_;
-  uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1, pre_clocks_ = 0;
+  uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1;
   int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
   int32_t cmd_now_[kCoreAxes] = {};
   bool pending_ = false;

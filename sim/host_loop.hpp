@@ -48,6 +48,8 @@ class HostLoop {
   // is <= t; 0 before the first.
   double output_at(double t) const;
 
+  // The output the last wake computed (in effect from its apply time on).
+  double last_output() const { return applied_.empty() ? 0.0 : applied_.back().second; }
   uint64_t wakes() const { return wakes_; }
   uint64_t overruns() const { return overruns_; }
   const mc::host::PidDouble& pid() const { return pid_; }

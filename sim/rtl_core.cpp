@@ -30,32 +30,25 @@ class RtlCore final : public CoreModel {
   RtlCore(const RtlCore&) = delete;
   RtlCore& operator=(const RtlCore&) = delete;
 
-  CoreOut outputs(const CoreIn& in) override {
+  CoreOut cycle(const CoreIn& in) override {
     apply_inputs<kCoreAxes>(*dut_, in);
     dut_->clk = 0;
     dut_->eval();
-    return read_outputs<kCoreAxes>(*dut_);
-  }
-  CoreOut cycle(const CoreIn& in) override {
-    const CoreOut o = outputs(in);
+    const CoreOut o = read_outputs<kCoreAxes>(*dut_);
     if (fst_) fst_->dump(2 * clock_);
     dut_->clk = 1;
     dut_->eval();
     if (fst_) fst_->dump(2 * clock_ + 1);
     ++clock_;
-    pcnt_ = in.rst ? 0 : (pcnt_ + 1) & ((1u << CoreTwin::pwm_bits) - 1);
     return o;
   }
-  bool try_skip(const CoreIn&, uint32_t) override { return false; }
-  uint32_t pwm_count() const override { return pcnt_; }
-  const char* name() const override { return "rtl"; }
+  std::optional<Skipped> try_skip(const CoreIn&, uint32_t) override { return std::nullopt; }
 
  private:
   std::unique_ptr<VerilatedContext> ctx_;
   std::unique_ptr<Vmotion_core2> dut_;
   std::unique_ptr<VerilatedFstC> fst_;
   uint64_t clock_ = 0;
-  uint32_t pcnt_ = 0;
 };
 
 }  // namespace

@@ -59,9 +59,9 @@ set_tests_properties(synth_quad_decoder_ice40 PROPERTIES LABELS synth TIMEOUT 60
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
 target_link_libraries(test_pid_numerics PRIVATE mc_hls mc_host)
 mc_gtest(test_motion_core_rtl rtl test_motion_core_rtl.cpp)
-target_link_libraries(test_motion_core_rtl PRIVATE mc_hls mc_host vmotion_core vmotion_core2)
+target_link_libraries(test_motion_core_rtl PRIVATE mc_hls mc_host mc_sim vmotion_core vmotion_core2)
 mc_gtest(test_motion_core_twin unit test_motion_core_twin.cpp)
-target_link_libraries(test_motion_core_twin PRIVATE mc_hls)
+target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_sim)
 
 # The iCEBreaker top with its link: a host speaks the protocol bit by bit on
 # the UART pins (tests/board_harness.hpp, sim/uart_model.hpp).

@@ -15,6 +15,7 @@
 
 #include "Vmotion_core.h"
 #include "Vmotion_core2.h"
+#include "dc_motor.hpp"
 #include "interp_bench.hpp"
 #include "motion_core.hpp"
 #include "vl_context.hpp"
@@ -22,14 +23,6 @@
 
 namespace mc::test {
 namespace {
-
-// Quadrature pins of a count: A leads B when counting up.
-void pins_of(int64_t count, bool& a, bool& b) {
-  static constexpr bool ka[4] = {false, true, true, false}, kb[4] = {false, false, true, true};
-  const int q = int(((count % 4) + 4) % 4);
-  a = ka[q];
-  b = kb[q];
-}
 
 template <typename Model, int N>
 class MotionCosim {
@@ -69,7 +62,11 @@ class MotionCosim {
 
  private:
   void drive_inputs() {
-    for (int a = 0; a < N; ++a) pins_of(count_[a], in_.enc_a[a], in_.enc_b[a]);
+    for (int a = 0; a < N; ++a) {
+      const sim::QuadPins p = sim::quadrature_pins(count_[a], 2000);  // A and B; Z is random here
+      in_.enc_a[a] = p.a;
+      in_.enc_b[a] = p.b;
+    }
     sim::apply_inputs<N>(*dut_, in_);
   }
 
