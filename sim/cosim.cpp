@@ -728,9 +728,3 @@ RunResult run_isolated(const RunSpec& spec) {
 }
 
 }  // namespace mc::sim
-
-// libsystemc's own main() calls sc_main, and the library cannot link without
-// one; motionctl has its own main and runs its models with sc_start().
-int sc_main(int, char**) {
-  return 1;
-}
