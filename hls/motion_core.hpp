@@ -41,6 +41,8 @@ struct MotionIn {
   bool drv_allow[NAXES] = {};
   bool drv_ovr[NAXES] = {};
   int16_t drv_ovr_val[NAXES] = {};
+  // sample RAM read: {axis, field}
+  uint8_t smp_raddr = 0;
 };
 
 template <int NAXES>
@@ -54,11 +56,14 @@ struct MotionOut {
   bool pwm[NAXES] = {}, dir[NAXES] = {}, drv_en[NAXES] = {};
   int16_t drv_u[NAXES] = {};
   bool tick = false, done = false;
-  int32_t smp_cmd[NAXES] = {}, smp_fb[NAXES] = {}, smp_err[NAXES] = {};
+  uint32_t smp_rdata = 0;
   int16_t smp_u[NAXES] = {};
   bool smp_sat[NAXES] = {}, pid_en[NAXES] = {};
   int32_t pos[NAXES] = {}, cmd[NAXES] = {};
 };
+
+// Fields of the sample RAM (rtl/motion_core.v): smp_raddr = axis << 2 | field.
+enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2 };
 
 template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8>
 class MotionCore {
@@ -92,15 +97,13 @@ class MotionCore {
     o.ip_seg_cnt = ip_.seg_cnt();
     o.tick = pid_.tick();
     o.done = pid_.done();
+    o.smp_rdata = r_.smp_rdata;
     for (int a = 0; a < NAXES; ++a) {
       o.enc[a] = dec_[a].out();
       o.pwm[a] = r_.pwm[a];
       o.dir[a] = r_.dir[a];
       o.drv_en[a] = r_.drv_en[a];
       o.drv_u[a] = r_.drv_u[a];
-      o.smp_cmd[a] = r_.smp_cmd[a];
-      o.smp_fb[a] = r_.smp_fb[a];
-      o.smp_err[a] = r_.smp_err[a];
       o.smp_u[a] = r_.smp_u[a];
       o.smp_sat[a] = r_.smp_sat[a];
       o.pid_en[a] = pid_.enabled(a);
@@ -124,17 +127,26 @@ class MotionCore {
         n.in_cmd[a] = cmd[a];
         n.in_fb[a] = fb[a];
       }
+    // Sample RAM: the RTL's sweep fills bank !pb word by word; only the
+    // published bank pb is ever read, so writing the words at done is the
+    // same to every reader. A reset neither swaps nor clears it.
+    n.smp_rdata = uint32_t(r_.bank[r_.pb][in.smp_raddr >> 2 & 3][in.smp_raddr & 3]);
+    if (!in.rst && done) {
+      for (int a = 0; a < NAXES; ++a) {
+        int32_t* w = n.bank[!r_.pb][a];
+        w[SMP_CMD] = r_.in_cmd[a];
+        w[SMP_FB] = r_.in_fb[a];
+        w[SMP_ERR] = pid_.core().err(a);
+      }
+      n.pb = !r_.pb;
+    }
     if (in.rst) {
       for (int a = 0; a < NAXES; ++a) {
-        n.smp_cmd[a] = n.smp_fb[a] = n.smp_err[a] = 0;
         n.smp_u[a] = 0;
         n.smp_sat[a] = false;
       }
     } else if (done) {
       for (int a = 0; a < NAXES; ++a) {
-        n.smp_cmd[a] = r_.in_cmd[a];
-        n.smp_fb[a] = r_.in_fb[a];
-        n.smp_err[a] = pid_.core().err(a);
         n.smp_u[a] = int16_t(pid_.core().u(a));
         n.smp_sat[a] = pid_.core().sat(a);
       }
@@ -182,6 +194,7 @@ class MotionCore {
   // ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
+    if (r_.smp_rdata != uint32_t(r_.bank[r_.pb][in.smp_raddr >> 2 & 3][in.smp_raddr & 3])) return false;
     InterpIn ii;
     ii.wr = in.seg_wr;
     ii.abort = in.ip_abort;
@@ -203,6 +216,8 @@ class MotionCore {
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
   }
+  // A word of the published sample (what smp_raddr would read).
+  int32_t sample(int a, SampleField f) const { return r_.bank[r_.pb][a][f]; }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }
 
@@ -249,7 +264,9 @@ class MotionCore {
 
   struct Regs {
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
-    int32_t smp_cmd[NAXES] = {}, smp_fb[NAXES] = {}, smp_err[NAXES] = {};
+    int32_t bank[2][4][4] = {};  // [bank][axis][field], as the RTL's 32 words
+    bool pb = false;
+    uint32_t smp_rdata = 0;
     int16_t smp_u[NAXES] = {};
     bool smp_sat[NAXES] = {};
     uint32_t pcnt = 0;

@@ -137,7 +137,8 @@ module mc_board #(
   wire [    NAXES*32-1:0] enc_pos_load_val, enc_idx_pos;
   wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_u, smp_u;
   wire [       NAXES-1:0] drv_ovr, smp_sat, pid_en;
-  wire [    NAXES*32-1:0] smp_cmd, smp_fb, smp_err;
+  wire [             3:0] smp_raddr;
+  wire [            31:0] smp_rdata;
   wire                    done;
   wire [      FILT_W-1:0] hw_filt;
   wire                    hw_dir_inv, hw_load;
@@ -222,9 +223,8 @@ module mc_board #(
       .drv_en_i          (drv_en_o),
       .drv_u_i           (drv_u),
       .done_i            (done),
-      .smp_cmd_i         (smp_cmd),
-      .smp_fb_i          (smp_fb),
-      .smp_err_i         (smp_err),
+      .smp_raddr_o       (smp_raddr),
+      .smp_rdata_i       (smp_rdata),
       .smp_u_i           (smp_u),
       .smp_sat_i         (smp_sat),
       .pid_en_i          (pid_en),
@@ -319,9 +319,8 @@ module mc_board #(
       .drv_u           (drv_u),
       .tick            (tick),
       .done            (done),
-      .smp_cmd         (smp_cmd),
-      .smp_fb          (smp_fb),
-      .smp_err         (smp_err),
+      .smp_raddr       (smp_raddr),
+      .smp_rdata       (smp_rdata),
       .smp_u           (smp_u),
       .smp_sat         (smp_sat),
       .pid_en          (pid_en),

@@ -113,9 +113,8 @@ module mc_regs #(
     input  wire [    NAXES*16-1:0] drv_u_i,
     // motion_core: per-sample values
     input  wire                    done_i,
-    input  wire [    NAXES*32-1:0] smp_cmd_i,
-    input  wire [    NAXES*32-1:0] smp_fb_i,
-    input  wire [    NAXES*32-1:0] smp_err_i,
+    output wire [             3:0] smp_raddr_o,  // motion_core's sample RAM: {axis, field}
+    input  wire [            31:0] smp_rdata_i,
     input  wire [    NAXES*16-1:0] smp_u_i,
     input  wire [       NAXES-1:0] smp_sat_i,
     input  wire [       NAXES-1:0] pid_en_i,
@@ -190,27 +189,17 @@ module mc_regs #(
 
   (* no_rw_check *)
   reg [31:0] shadow[0:255];
-  reg sw;
-  reg [7:0] swa;
-  reg [31:0] swd;
   integer si;
   initial begin
     for (si = 0; si < 256; si = si + 1) shadow[si] = 32'd0;
     shadow[R_WDOG[7:0]]   = {8'd0, WDOG_RESET};
     shadow[R_SAFETY[7:0]] = B_SAFETY_DEFAULT;
   end
-  always @(posedge clk) begin
-    if (sw) shadow[swa] <= swd;
-    sq <= shadow[sa];
-  end
 
   // Per-axis inputs padded to four axes, so the multiplexer indexes them
   // with the address's two axis bits (absent axes read 0; they are refused
   // before a read anyway).
   localparam integer PADN = 4 - NAXES;
-  wire [127:0] p_fb = {{(PADN * 32) {1'b0}}, smp_fb_i};
-  wire [127:0] p_cmd = {{(PADN * 32) {1'b0}}, smp_cmd_i};
-  wire [127:0] p_err = {{(PADN * 32) {1'b0}}, smp_err_i};
   wire [127:0] p_idx = {{(PADN * 32) {1'b0}}, enc_idx_pos_i};
   wire [63:0] p_ecnt = {{(PADN * 16) {1'b0}}, enc_err_cnt_i};
   wire [63:0] p_u = {{(PADN * 16) {1'b0}}, smp_u_i};
@@ -228,11 +217,8 @@ module mc_regs #(
     live  = 32'd0;
     if (ra[9]) begin
       case (ra_off)
-        R_AX_POS: live = p_fb[ra_ax*32+:32];
         R_AX_IDX: live = p_idx[ra_ax*32+:32];
         R_AX_ENC_STAT: live = {13'd0, p_seen[ra_ax], p_armd[ra_ax], p_eerr[ra_ax], p_ecnt[ra_ax*16+:16]};
-        R_AX_CMD: live = p_cmd[ra_ax*32+:32];
-        R_AX_ERR: live = p_err[ra_ax*32+:32];
         R_AX_OUT: live = {13'd0, p_den[ra_ax], p_pen[ra_ax], p_sat[ra_ax], p_u[ra_ax*16+:16]};
         R_AX_DRV: live = {15'd0, p_ovr[ra_ax], p_du[ra_ax*16+:16]};
         default:  live = 32'd0;
@@ -271,6 +257,26 @@ module mc_regs #(
     end
   end
   always @(posedge clk) q <= live;
+
+  // A sample's POS, CMD and ERR come from motion_core's sample RAM, which
+  // answers in the same two clocks as the multiplexer.
+  reg  [1:0] ra_fld;
+  reg        ra_smp, q_smp;
+  always @(*) begin
+    ra_smp = ra[9];
+    case (ra_off)
+      R_AX_CMD: ra_fld = 2'd0;
+      R_AX_POS: ra_fld = 2'd1;
+      R_AX_ERR: ra_fld = 2'd2;
+      default: begin
+        ra_fld = 2'd3;
+        ra_smp = 1'b0;
+      end
+    endcase
+  end
+  assign smp_raddr_o = {ra_ax, ra_fld};
+  always @(posedge clk) q_smp <= ra_smp;
+  wire [31:0] qv = q_smp ? smp_rdata_i : q;
 
   // ---------------------------------------------------------------------
   // Register decoding: does an address exist, take writes, read back from
@@ -314,7 +320,7 @@ module mc_regs #(
 
   assign pay_raddr_o = bi;
   assign seg_wdata_o = data;
-  assign pid_we_o    = xs == X_PIDW;
+  assign pid_we_o    = xs == X_PIDW && !rst;  // no write from a powered-up state
   assign pid_waddr_o = addr[7:0];
   assign pid_wdata_o = data;
   assign pid_re_o    = xs == X_PIDR;
@@ -340,6 +346,12 @@ module mc_regs #(
 
   // Register writes: the strobes pulse for one clock, in X_APPLY.
   wire apply = xs == X_APPLY;
+  // The shadow RAM takes every applied write, never one during reset,
+  // whatever state the executor powers up in.
+  always @(posedge clk) begin
+    if (apply && !rst) shadow[sidx(addr)] <= data;
+    sq <= shadow[sa];
+  end
   wire w_glb = apply & is_glb;
   wire w_ax = apply & is_ax & ~is_pid;
   integer ax;
@@ -355,9 +367,6 @@ module mc_regs #(
     enc_idx_arm_o    <= {NAXES{1'b0}};
     enc_idx_disarm_o <= {NAXES{1'b0}};
     enc_err_clr_o    <= {NAXES{1'b0}};
-    sw               <= apply;
-    swa              <= sidx(addr);
-    swd              <= data;
     if (rst) begin
       ip_hold_o     <= 1'b0;
       wdog_o        <= WDOG_RESET;
@@ -368,7 +377,6 @@ module mc_regs #(
       enc_dir_inv_o <= {NAXES{1'b0}};
       enc_idx_clr_en_o <= {NAXES{1'b0}};
       drv_ovr_o     <= {NAXES{1'b0}};
-      sw            <= 1'b0;
     end else begin
       if (w_glb) begin
         case (addr[4:0])
@@ -542,7 +550,7 @@ module mc_regs #(
   wire x_wr = xs == X_RD2 || (xs == X_REPLY && !w_wr);
   assign tx_we_o    = w_wr | x_wr;
   assign tx_waddr_o = w_wr ? w_ptr : 4'd0;
-  assign tx_wdata_o = (w_wr || !(val_direct || val_shadow)) ? q : (val_direct ? val : sq);
+  assign tx_wdata_o = (w_wr || !(val_direct || val_shadow)) ? qv : (val_direct ? val : sq);
 
   // ---------------------------------------------------------------------
   // Walker: after each sample, TLM_HDR then each axis's POS, CMD, ERR, OUT
@@ -559,7 +567,7 @@ module mc_regs #(
   reg        tlm_due_l;
   reg  [31:0] fb_l, dif;
   wire       tlm_due = tlm_decim != 16'd0 && tlm_cnt + 16'd1 >= tlm_decim;
-  wire       w_start = done_d[1];  // smp_* settle the clock after done
+  wire       w_start = done_d[1];  // the sample RAM and smp_u swap the clock after done
   wire       w_last = !w_hdr && w_k == 2'd3 && {2'd0, w_a} == NAXES4 - 4'd1;
   wire       tlm_free = !(tlm_pend || tlm_sending || w_tlm_busy);
 
@@ -678,8 +686,8 @@ module mc_regs #(
       end
       if (t_v && !t_hdr) begin
         case (t_k)
-          2'd0: fb_l <= q;
-          2'd1: dif <= q - fb_l;
+          2'd0: fb_l <= qv;
+          2'd1: dif <= qv - fb_l;
           2'd2: ferr_o <= ferr_hit[NAXES-1:0];
           default: ;
         endcase

@@ -9,11 +9,17 @@
 //   decoders through enc_* (quad_decoder's ports, one slice per axis), and
 //   queue segments through seg_wr/seg_wdata (interp_core's port; set the
 //   position with ip_set while the interpolator is idle).
-// - The PID samples smp_cmd/smp_fb at tick, for all axes at once, and the
-//   decoders take their velocity sample at the same tick. When the sweep ends
-//   (done), the sample's outputs are latched together into smp_* and reach
+// - The PID samples cmd/pos at tick, for all axes at once, and the decoders
+//   take their velocity sample at the same tick. When the sweep ends (done),
+//   the sample's outputs are latched together into smp_u/smp_sat and reach
 //   the drive in the next clock, so every axis's drive changes in the same
 //   clock, LATENCY cycles (pid_core) + 2 after the tick.
+// - The sample's command, feedback and error per axis are kept in a block
+//   RAM of two banks: the sweep writes one while smp_raddr reads the other,
+//   and done swaps them, so a read always sees one whole sample, the last
+//   completed, from the clock after done until the next done. smp_raddr =
+//   {axis, field} (field 0 command, 1 feedback, 2 error; 3 and absent axes
+//   read 0), smp_rdata one clock later.
 // - drv_allow (from the safety logic) low forces the drive value to 0 and the
 //   pins low in the next clock, whatever the PID does. drv_ovr hands an axis's
 //   drive to the host (drv_ovr_val) instead of the PID: the host-loop mode.
@@ -88,9 +94,8 @@ module motion_core #(
     // per-sample telemetry
     output wire                  tick,
     output wire                  done,
-    output reg  [  NAXES*32-1:0] smp_cmd,
-    output reg  [  NAXES*32-1:0] smp_fb,
-    output reg  [  NAXES*32-1:0] smp_err,
+    input  wire [           3:0] smp_raddr,
+    output reg  [          31:0] smp_rdata,
     output reg  [  NAXES*16-1:0] smp_u,
     output reg  [     NAXES-1:0] smp_sat,
     output wire [     NAXES-1:0] pid_en,
@@ -177,8 +182,13 @@ module motion_core #(
   // ---------------------------------------------------------------------
   // The loops.
   wire [NAXES*16-1:0] pid_u;
-  wire [NAXES*32-1:0] pid_err;
   wire [   NAXES-1:0] pid_sat;
+  wire                pid_smp_we;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire [         3:0] pid_smp_ax;
+  /* verilator lint_on UNUSEDSIGNAL */
+  wire [         1:0] pid_smp_fld;
+  wire [        31:0] pid_smp_wd;
   /* verilator lint_off PINCONNECTEMPTY */
   pid_core #(
       .NAXES(NAXES)
@@ -197,9 +207,13 @@ module motion_core #(
       .cmd_i     (cmd),
       .fb_i      (pos),
       .u_o       (pid_u),
-      .err_o     (pid_err),
+      .err_o     (),
       .sat_o     (pid_sat),
       .en_o      (pid_en),
+      .smp_we_o  (pid_smp_we),
+      .smp_ax_o  (pid_smp_ax),
+      .smp_fld_o (pid_smp_fld),
+      .smp_wd_o  (pid_smp_wd),
       .tick_o    (pid_tick),
       .done_o    (done),
       .busy_o    ()
@@ -207,29 +221,32 @@ module motion_core #(
   /* verilator lint_on PINCONNECTEMPTY */
   assign tick = pid_tick;
 
-  // The inputs as pid_core sampled them, for telemetry: held from tick, so
-  // they are published with the outputs they produced.
-  reg [NAXES*32-1:0] in_cmd, in_fb;
+  // The sample RAM: bank ~pb is written by the sweep, bank pb is read. pb is
+  // not reset: a reset in the middle of a sweep must not publish the bank it
+  // was writing (the next sweep rewrites all of it before done).
+  (* no_rw_check *)
+  reg [31:0] smp_ram[0:31];
+  reg pb;
+  integer si;
+  initial begin
+    for (si = 0; si < 32; si = si + 1) smp_ram[si] = 32'd0;
+    pb = 1'b0;
+  end
   always @(posedge clk) begin
-    if (pid_tick) begin
-      in_cmd <= cmd;
-      in_fb  <= pos;
-    end
+    if (pid_smp_we) smp_ram[{~pb, pid_smp_ax[1:0], pid_smp_fld}] <= pid_smp_wd;
+    smp_rdata <= smp_ram[{pb, smp_raddr}];
+  end
+  always @(posedge clk) begin
+    if (done && !rst) pb <= ~pb;
   end
 
   // pid_core writes each axis's outputs at a different clock of the sweep;
   // latching them at done publishes one coherent sample.
   always @(posedge clk) begin
     if (rst) begin
-      smp_cmd <= {NAXES * 32{1'b0}};
-      smp_fb  <= {NAXES * 32{1'b0}};
-      smp_err <= {NAXES * 32{1'b0}};
       smp_u   <= {NAXES * 16{1'b0}};
       smp_sat <= {NAXES{1'b0}};
     end else if (done) begin
-      smp_cmd <= in_cmd;
-      smp_fb  <= in_fb;
-      smp_err <= pid_err;
       smp_u   <= pid_u;
       smp_sat <= pid_sat;
     end

@@ -15,6 +15,9 @@
 //   pulses; cmd_i and fb_i are sampled in that cycle, for all axes at once so
 //   coordinated axes see the same instant. LATENCY cycles after tick_o,
 //   done_o pulses and u_o/err_o/sat_o hold the new sample's values.
+// - smp_* stream each axis's command, feedback and error of the sample as
+//   the sweep uses them, one word per clock, all before done_o. A user that
+//   keeps them in block RAM needs none of err_o's flip-flops (motion_core).
 //
 // Structure (docs/numerics.md section 8 gives the area and the reasons). Three
 // shared units run a fixed microcoded schedule for every axis in turn:
@@ -84,6 +87,12 @@ module pid_core #(
     output wire [   NAXES*32-1:0] err_o,   // processed error, signed counts
     output wire [      NAXES-1:0] sat_o,   // output limit active
     output wire [      NAXES-1:0] en_o,    // axis enabled
+    // the sample's inputs and error as the sweep takes them, for a sample
+    // RAM (motion_core): field 0 command, 1 feedback, 2 error
+    output wire                   smp_we_o,
+    output wire [            3:0] smp_ax_o,
+    output wire [            1:0] smp_fld_o,
+    output wire [           31:0] smp_wd_o,
     output reg                    tick_o,  // sample instant
     output reg                    done_o,  // sweep finished, outputs valid
     output wire                   busy_o
@@ -796,6 +805,15 @@ module pid_core #(
   endgenerate
   assign u_o   = u_r;
   assign err_o = e_r;
+  // Command and feedback leave the chain's head in slot cycles 0 and 1, the
+  // error the front ALU in cycle 7 (the microcode's chain-shift and write-e
+  // columns): never two in one clock.
+  /* verilator lint_off WIDTH */
+  assign smp_we_o  = fa_ok & (ch_shift | fa_we_e);
+  assign smp_ax_o  = sl;
+  /* verilator lint_on WIDTH */
+  assign smp_fld_o = fa_we_e ? 2'd2 : {1'b0, cy[0]};
+  assign smp_wd_o  = fa_we_e ? fa_acc[31:0] : in_w;
   assign sat_o = s_r;
   assign en_o  = en;
 

@@ -57,6 +57,7 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   vl::set(d.drv_allow, allow);
   vl::set(d.drv_ovr, ovr);
   vl::set(d.drv_ovr_val, ovv);
+  d.smp_raddr = in.smp_raddr;
 }
 
 // The model's outputs in the current clock (after eval with these inputs).
@@ -74,14 +75,12 @@ MotionOut<N> read_outputs(const Model& d) {
   o.ip_seg_cnt = int(d.ip_seg_cnt);
   o.tick = d.tick;
   o.done = d.done;
+  o.smp_rdata = d.smp_rdata;
   for (int a = 0; a < N; ++a) {
     o.pwm[a] = (d.pwm_o >> a) & 1;
     o.dir[a] = (d.dir_o >> a) & 1;
     o.drv_en[a] = (d.drv_en_o >> a) & 1;
     o.drv_u[a] = int16_t(vl::get_bits(d.drv_u, 16 * a, 16));
-    o.smp_cmd[a] = int32_t(vl::get_bits(d.smp_cmd, 32 * a, 32));
-    o.smp_fb[a] = int32_t(vl::get_bits(d.smp_fb, 32 * a, 32));
-    o.smp_err[a] = int32_t(vl::get_bits(d.smp_err, 32 * a, 32));
     o.smp_u[a] = int16_t(vl::get_bits(d.smp_u, 16 * a, 16));
     o.smp_sat[a] = (d.smp_sat >> a) & 1;
     o.pid_en[a] = (d.pid_en >> a) & 1;
