@@ -20,3 +20,6 @@ add_dependencies(test_cli_interp motionctl)
 
 mc_gtest(test_step_metrics unit test_step_metrics.cpp)
 target_link_libraries(test_step_metrics PRIVATE mc_host)
+
+mc_gtest(test_tuning unit test_tuning.cpp)
+target_link_libraries(test_tuning PRIVATE mc_host mc_sim)

@@ -1,0 +1,282 @@
+// host/tuning: relay analysis against the plant's frequency response,
+// identification of the simulated default axis, pole placement, and the
+// designed gains closing the loop on the true nonlinear plant.
+#include "tuning.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+
+#include "dc_motor.hpp"
+#include "errors.hpp"
+#include "machine_config.hpp"
+#include "pid_core.hpp"
+
+namespace mc::host {
+namespace {
+
+using cplx = std::complex<double>;
+constexpr double kPi = 3.14159265358979323846;
+
+sim::AxisConfig default_x() {
+  return sim::axis(sim::default_machine(), "x");
+}
+
+// The axis from drive units to counts, sampled with a ZOH at ts: the exact
+// discrete frequency response of what a relay or PID at ts sees (the plant's
+// own ZOH matrices at step ts). Drive units through the averaged PWM: a
+// multiple of 2^(15 - pwm_bits) maps to exactly u / 32768 * supply_v.
+cplx plant_z(const sim::AxisConfig& cfg, double ts, double w) {
+  sim::AxisPlant p(cfg, ts);
+  const cplx z = std::polar(1.0, w * ts);
+  const Eigen::Matrix3cd m = z * Eigen::Matrix3cd::Identity() - p.ad().cast<cplx>();
+  const Eigen::Vector3cd x = m.partialPivLu().solve(p.bd().col(0).cast<cplx>());
+  return x(2) * (cfg.drive.supply_v / 32768 * double(cfg.encoder_cpr) / (2 * kPi));
+}
+
+// The frequency in (0, pi/ts) where the sampled plant's phase is phase_deg.
+double phase_crossing(const sim::AxisConfig& cfg, double ts, double phase_deg) {
+  const double target = phase_deg * kPi / 180;
+  // The phase falls monotonically from -90 deg; unwrap through -180.
+  const auto phase = [&](double w) {
+    const double a = std::arg(plant_z(cfg, ts, w));
+    return a > 0 ? a - 2 * kPi : a;
+  };
+  double lo = 1, hi = kPi / ts * 0.999;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (phase(mid) > target ? lo : hi) = mid;
+  }
+  return std::sqrt(lo * hi);
+}
+
+// Relay control of the simulated axis at ts about a setpoint half a count
+// off the encoder's grid (so the error is never exactly 0).
+std::vector<double> relay_capture(const sim::AxisConfig& cfg, bool friction, double d, double eps, double ts,
+                                  double duration) {
+  sim::AxisPlant p(cfg, 1e-6);
+  p.set_friction(friction);
+  Relay relay(d, eps);
+  const int per_sample = int(std::lround(ts / p.dt_s()));
+  std::vector<double> y;
+  for (int k = 0; k * ts < duration; ++k) {
+    const double pos = double(p.encoder_count());
+    y.push_back(pos);
+    const double v = sim::drive_volts(cfg.drive, int32_t(relay.update(0.5 - pos)));
+    for (int s = 0; s < per_sample; ++s) p.step(v);
+  }
+  return y;
+}
+
+// The relay's limit cycle lies where the describing function says, to about
+// a degree; this plant's phase is so flat near -180 deg (-90 from the
+// integrator, the rest from two lags far apart) that a degree is 5 % of
+// frequency. So Ku and Tu are biased low and high by 10 % and 5 % against the
+// plant's exact -180 deg point, whatever the sample period, while the point
+// the relay does find (its period, pi a / (4 d)) lies on the plant's
+// frequency response to 1 %. docs/tuning.md discusses it.
+TEST(TuningRelay, UltimateGainAndPeriodMatchThePlant) {
+  const sim::AxisConfig cfg = default_x();
+  const double d = 8192;
+  for (const double ts : {1e-5, 1e-4}) {
+    const double wu = phase_crossing(cfg, ts, -180);
+    const double ku = 1 / std::abs(plant_z(cfg, ts, wu)), tu = 2 * kPi / wu;
+    for (const bool friction : {false, true}) {
+      const RelayResult r = relay_analyse(relay_capture(cfg, friction, d, 0, ts, 0.3), ts, d, 0);
+      const cplx g = plant_z(cfg, ts, 2 * kPi / r.tu);
+      std::printf(
+          "relay d %.0f, ts %g us, friction %-3s: Ku %.1f (plant %.1f, %+.1f %%), Tu %.3f ms (plant %.3f, "
+          "%+.1f %%), "
+          "a %.1f counts, %d periods; plant at Tu: %.1f deg, 1/|G| %.1f\n",
+          d, 1e6 * ts, friction ? "on" : "off", r.ku, ku, 100 * (r.ku / ku - 1), 1e3 * r.tu, 1e3 * tu,
+          100 * (r.tu / tu - 1), r.amplitude, r.periods, std::arg(g) * 180 / kPi, 1 / std::abs(g));
+      EXPECT_NEAR(r.ku, ku, 0.12 * ku);
+      EXPECT_NEAR(r.tu, tu, 0.07 * tu);
+      EXPECT_GE(r.periods, 10);
+      if (!friction) {
+        EXPECT_NEAR(r.ku, 1 / std::abs(g), 0.01 * r.ku);
+        EXPECT_NEAR(std::fabs(std::arg(g)) * 180 / kPi, 180, 2);
+      }
+    }
+  }
+}
+
+// With hysteresis the relay finds the point where the plant's phase is
+// -180 + asin(eps/a) and its gain pi a / (4 d): compare at the measured Tu.
+TEST(TuningRelay, HysteresisMovesThePointAsTheDescribingFunctionSays) {
+  const sim::AxisConfig cfg = default_x();
+  const double ts = cfg.pid.ts_s, d = 8192;
+  for (const double eps : {2.0, 8.0}) {
+    const RelayResult r = relay_analyse(relay_capture(cfg, false, d, eps, ts, 0.4), ts, d, eps);
+    const cplx g = plant_z(cfg, ts, 2 * kPi / r.tu);
+    const double phase = std::arg(g) * 180 / kPi - (std::arg(g) > 0 ? 360 : 0);
+    std::printf("eps %.0f: a %.1f, Tu %.3f ms, phase %.1f deg (plant at Tu %.1f), |G| %.4g (plant %.4g)\n",
+                eps, r.amplitude, 1e3 * r.tu, r.phase_deg, phase, kPi * r.amplitude / (4 * d), std::abs(g));
+    EXPECT_NEAR(r.phase_deg, phase, 3);
+    EXPECT_NEAR(kPi * r.amplitude / (4 * d), std::abs(g), 0.05 * std::abs(g));
+  }
+}
+
+TEST(TuningRelay, RejectsCapturesWithoutALimitCycle) {
+  std::vector<double> flat(1000, 3.0), slow(1000);
+  for (size_t i = 0; i < slow.size(); ++i) slow[i] = 100 * std::sin(2 * kPi * double(i) / 400);
+  EXPECT_THROW(relay_analyse(flat, 1e-4, 1000, 0), InputError);
+  EXPECT_THROW(relay_analyse(slow, 1e-4, 1000, 0), InputError);  // 2.5 periods
+  EXPECT_THROW(relay_analyse(slow, 0, 1000, 0), InputError);
+  EXPECT_THROW(Relay(0, 1), InputError);
+  EXPECT_THROW(Relay(1, -1), InputError);
+}
+
+TEST(TuningRelay, RulesGiveTheTabulatedGains) {
+  const RelayResult r{100, 0.01, 10, -180, 0, 5};
+  const PidGains zn = design_relay(r, 1e-4, RelayRule::ZieglerNichols);
+  EXPECT_DOUBLE_EQ(zn.kp, 60);
+  EXPECT_DOUBLE_EQ(zn.ki, 60 / 0.005);
+  EXPECT_DOUBLE_EQ(zn.kd, 60 * 0.01 / 8);
+  EXPECT_DOUBLE_EQ(zn.tf, 0.01 / 80);
+  const PidGains tl = design_relay(r, 1e-4, RelayRule::TyreusLuyben);
+  EXPECT_DOUBLE_EQ(tl.kp, 100 / 2.2);
+  EXPECT_DOUBLE_EQ(tl.ki, 100 / 2.2 / 0.022);
+  const PidGains no = design_relay(r, 1e-3, RelayRule::NoOvershoot);
+  EXPECT_DOUBLE_EQ(no.kp, 20);
+  EXPECT_DOUBLE_EQ(no.kd, 20 * 0.01 / 3);
+  EXPECT_DOUBLE_EQ(no.tf, 1e-3);  // Td/10 = 0.33 ms, held at Ts
+}
+
+TEST(TuningExcitation, PrbsIsAMaximalLengthSequence) {
+  const std::vector<double> u = prbs(100, 1e-4, 2 * 1023e-4, 1e-4, false);
+  ASSERT_EQ(u.size(), 2046u);
+  double sum = 0;
+  for (size_t i = 0; i < 1023; ++i) {
+    EXPECT_EQ(u[i], u[i + 1023]);
+    EXPECT_EQ(std::fabs(u[i]), 100);
+    sum += u[i];
+  }
+  EXPECT_EQ(std::fabs(sum), 100);  // 512 of one level, 511 of the other
+  for (size_t per : {3u, 11u, 31u, 33u, 93u, 341u}) {
+    bool periodic = true;
+    for (size_t i = 0; i + per < 1023 && periodic; ++i) periodic = u[i] == u[i + per];
+    EXPECT_FALSE(periodic) << per;
+  }
+  // Balanced: each held bit is followed by its negation.
+  const std::vector<double> b = prbs(50, 5e-4, 0.1, 1e-4);
+  ASSERT_EQ(b.size(), 1000u);
+  for (size_t i = 0; i + 10 <= b.size(); i += 10) {
+    EXPECT_EQ(b[i], b[i + 4]);
+    EXPECT_EQ(b[i] + b[i + 5], 0);
+  }
+  EXPECT_THROW(prbs(0, 1e-3, 1, 1e-4), InputError);
+}
+
+TEST(TuningExcitation, MultisineHasPowerOnlyAtItsTones) {
+  const double ts = 1e-4, dur = 0.5, amp = 1000;
+  const std::vector<double> u = multisine(amp, 10, 500, 8, dur, ts);
+  ASSERT_EQ(u.size(), 5000u);
+  double peak = 0;
+  for (double x : u) peak = std::max(peak, std::fabs(x));
+  EXPECT_NEAR(peak, amp, 1e-9);
+  // DFT bins are 2 Hz apart; the tones sit on bins (whole cycles per capture).
+  int tones = 0;
+  double total = 0, in_tones = 0;
+  for (int bin = 0; bin < 2500; ++bin) {
+    cplx s = 0;
+    for (size_t i = 0; i < u.size(); ++i) s += u[i] * std::polar(1.0, -2 * kPi * bin * double(i) / 5000);
+    const double pw = std::norm(s);
+    total += pw;
+    if (pw > 1e-6 * 5000.0 * 5000 * amp * amp) {
+      ++tones;
+      in_tones += pw;
+      EXPECT_GE(bin * 2.0, 10 - 1e-9);
+      EXPECT_LE(bin * 2.0, 500 + 1e-9);
+    }
+  }
+  EXPECT_EQ(tones, 8);
+  EXPECT_NEAR(in_tones / total, 1, 1e-9);
+  EXPECT_THROW(multisine(amp, 10, 6000, 8, dur, ts), InputError);  // above Nyquist
+}
+
+// The identified model's continuous parameters from the config: docs/plant.md,
+// K with the PWM's u / 32768 * supply mapping.
+struct TrueModel {
+  double k, tau;
+};
+TrueModel true_model(const sim::AxisConfig& cfg) {
+  const sim::MotorParams& m = cfg.motor;
+  const sim::AxisPlant p(cfg);
+  const double den = m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad;
+  return {m.kt_nm_per_a / den * cfg.drive.supply_v / 32768 * double(cfg.encoder_cpr) / (2 * kPi),
+          m.r_ohm * p.inertia_kg_m2() / den};
+}
+
+// Open-loop excitation of the simulated axis: u(k) held over sample k, y(k)
+// the position at sample k, in counts (quantized: the encoder count; else the
+// exact angle in counts).
+struct Capture {
+  std::vector<double> u, y;
+};
+Capture excite(const sim::AxisConfig& cfg, const std::vector<double>& u, bool friction, bool quantized) {
+  sim::AxisPlant p(cfg, 1e-6);
+  p.set_friction(friction);
+  const int per_sample = int(std::lround(cfg.pid.ts_s / p.dt_s()));
+  Capture c;
+  for (double uk : u) {
+    c.u.push_back(uk);
+    c.y.push_back(quantized ? double(p.encoder_count())
+                            : p.position_rad() / (2 * kPi) * double(cfg.encoder_cpr));
+    const double v = sim::drive_volts(cfg.drive, int32_t(std::lround(uk)));
+    for (int s = 0; s < per_sample; ++s) p.step(v);
+  }
+  return c;
+}
+
+TEST(TuningIdentify, ExactOnTheDiscreteModel) {
+  // Data generated by the model class itself: recovered to rounding.
+  const double k = 7.7, tau = 0.0072, ts = 1e-4, p = std::exp(-ts / tau);
+  const std::vector<double> u = prbs(4096, 5e-3, 0.5, ts);
+  std::vector<double> y(u.size(), 0.0);
+  double x = 0, v = 0;
+  for (size_t i = 0; i < u.size(); ++i) {
+    y[i] = x;
+    const double w = k * u[i];
+    x += w * ts + (v - w) * tau * (1 - p);
+    v = w + (v - w) * p;
+  }
+  for (const bool coulomb : {false, true}) {
+    const AxisModel m = identify(u, y, ts, coulomb, false);
+    EXPECT_NEAR(m.k, k, 1e-6 * k);
+    EXPECT_NEAR(m.tau, tau, 1e-6 * tau);
+    EXPECT_NEAR(m.coulomb, 0, 1e-6);
+    EXPECT_LT(m.fit_rms, 1e-6);
+  }
+}
+
+TEST(TuningIdentify, RecoversTheDefaultAxis) {
+  const sim::AxisConfig cfg = default_x();
+  const TrueModel tm = true_model(cfg);
+  // The excitation docs/tuning.md recommends: balanced PRBS, 4096 drive
+  // units (6 V), 10 ms bits (longer than tau), 1 s.
+  const std::vector<double> u = prbs(4096, 10e-3, 1.0, cfg.pid.ts_s);
+  for (const bool friction : {false, true}) {
+    for (const bool quantized : {false, true}) {
+      const Capture c = excite(cfg, u, friction, quantized);
+      const AxisModel m = identify(c.u, c.y, cfg.pid.ts_s, friction);
+      std::printf(
+          "friction %-3s encoder %-9s: K %.4f (true %.4f, %+.2f %%), tau %.4f ms (true %.4f, %+.2f %%), "
+          "Coulomb %.1f du, fit rms %.3f counts, fast %.3f ms\n",
+          friction ? "on" : "off", quantized ? "quantized" : "exact", m.k, tm.k, 100 * (m.k / tm.k - 1),
+          1e3 * m.tau, 1e3 * tm.tau, 100 * (m.tau / tm.tau - 1), m.coulomb, m.fit_rms, 1e3 * m.tau_fast);
+      EXPECT_NEAR(m.k, tm.k, 0.02 * tm.k);
+      EXPECT_NEAR(m.tau, tm.tau, 0.03 * tm.tau);
+      EXPECT_LT(m.fit_rms, 0.5);
+      if (friction) {
+        EXPECT_NEAR(m.coulomb, 52.9, 10);  // Tc R / Kt in drive units
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mc::host
