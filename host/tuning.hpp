@@ -107,9 +107,13 @@ AxisModel identify(const std::vector<double>& u, const std::vector<double>& y, d
 
 // Pole placement on K/(s (tau s + 1)) with C(s) = Kp + Ki/s + Kd s/(Tf s + 1):
 // the closed loop's four poles at s^2 + 2 zeta wc s + wc^2 and a double real
-// pole at -n wc. Throws InputError when the specification needs negative
+// pole at -n wc; g.ts = m.ts. The default damping is 2 (the "pair" is two
+// real poles, 0.27 wc and 3.7 wc): the PID acts on the error, so its zeros
+// are zeros of the command response too and add overshoot that the poles do
+// not show; with zeta = 2, n = 2 the default axis overshoots about 6 %
+// (docs/tuning.md). Throws InputError when the specification needs negative
 // gains or a negative Tf (wc too low for tau) or gives Tf below ts/2.
-PidGains design_model(const AxisModel& m, double wc, double zeta = 1.0, double n = 2.0);
+PidGains design_model(const AxisModel& m, double wc, double zeta = 2.0, double n = 2.0);
 // The bandwidth `tune --method model` uses without options (reasons in tuning.cpp).
 double default_bandwidth(const AxisModel& m);
 

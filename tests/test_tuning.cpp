@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -276,6 +277,126 @@ TEST(TuningIdentify, RecoversTheDefaultAxis) {
       }
     }
   }
+}
+
+// The closed-loop characteristic polynomial of K/(s (tau s + 1)) with the
+// PID, divided by tau Tf: [1, c3, c2, c1, c0].
+std::array<double, 5> closed_loop_poly(const AxisModel& m, const PidGains& g) {
+  const double tt = m.tau * g.tf;
+  return {1, (m.tau + g.tf) / tt, (1 + m.k * (g.kp * g.tf + g.kd)) / tt, m.k * (g.kp + g.ki * g.tf) / tt,
+          m.k * g.ki / tt};
+}
+
+TEST(TuningDesign, PolePlacementPutsThePolesWhereAsked) {
+  const AxisModel m{7.7, 7.2e-3, 0, 1e-4, 0, 0, 0};
+  for (const double wc : {150.0, 300.0, 600.0, 1200.0}) {
+    for (const double zeta : {0.7, 1.0}) {
+      for (const double n : {1.5, 2.0, 4.0}) {
+        const PidGains g = design_model(m, wc, zeta, n);
+        const std::array<double, 5> c = closed_loop_poly(m, g);
+        // The polynomial and, at the double pole, its derivative vanish.
+        const auto poly = [&](cplx s) { return (((c[0] * s + c[1]) * s + c[2]) * s + c[3]) * s + c[4]; };
+        const auto dpoly = [&](cplx s) { return ((4.0 * c[0] * s + 3 * c[1]) * s + 2 * c[2]) * s + c[3]; };
+        const double scale = std::pow(n * wc, 4);
+        const cplx dominant = wc * cplx(-zeta, std::sqrt(std::max(0.0, 1 - zeta * zeta)));
+        EXPECT_LT(std::abs(poly(dominant)), 1e-9 * scale) << wc << " " << zeta << " " << n;
+        EXPECT_LT(std::abs(poly(cplx(-n * wc))), 1e-9 * scale);
+        EXPECT_LT(std::abs(dpoly(cplx(-n * wc))), 1e-9 * scale / (n * wc));
+        EXPECT_GT(g.kp, 0);
+        EXPECT_GT(g.ki, 0);
+        EXPECT_GE(g.kd, 0);
+        EXPECT_EQ(g.ts, m.ts);
+      }
+    }
+  }
+  EXPECT_THROW(design_model(m, 10, 1, 2), InputError);     // slower than 1/tau
+  EXPECT_THROW(design_model(m, 20000, 1, 2), InputError);  // Tf below Ts/2
+}
+
+// The true plant (friction, stiction, electrical pole, averaged PWM, encoder)
+// in closed loop with the quantized controller the core runs (the hls twin):
+// a step of `step` counts from rest at t = 0.
+StepMetrics truth_step(const sim::AxisConfig& cfg, const PidGains& g, double step, double duration) {
+  sim::AxisPlant p(cfg, 1e-6);
+  const mc::PidParams par = core_params(design(g), CoreLimits{32767, 0, 0, 0});
+  mc::PidState st;
+  const int per_sample = int(std::lround(g.ts / p.dt_s()));
+  const auto target = int32_t(std::lround(step));
+  std::vector<double> t, y;
+  for (int k = 0; k * g.ts <= duration; ++k) {
+    const auto fb = int32_t(p.encoder_count());
+    t.push_back(k * g.ts);
+    y.push_back(fb);
+    const double v = sim::drive_volts(cfg.drive, pid_axis_update(par, st, true, target, fb).u);
+    for (int s = 0; s < per_sample; ++s) p.step(v);
+  }
+  return step_metrics(t, y, 0, target, 0);
+}
+
+PidGains config_gains(const sim::AxisConfig& cfg) {
+  PidGains g{};
+  g.kp = cfg.pid.kp;
+  g.ki = cfg.pid.ki;
+  g.kd = cfg.pid.kd;
+  g.tf = cfg.pid.tf_s;
+  g.ts = cfg.pid.ts_s;
+  return g;
+}
+
+// The whole model method on the default machine: excite the true plant,
+// identify, design with the default bandwidth and damping, and close the
+// loop on the true plant with the quantized controller. The 1 mm step
+// (400 counts) is the one docs/plant.md measures the default gains with.
+TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
+  const sim::AxisConfig cfg = default_x();
+  const Capture c = excite(cfg, prbs(4096, 10e-3, 1.0, cfg.pid.ts_s), true, true);
+  const AxisModel m = identify(c.u, c.y, cfg.pid.ts_s);
+  const double wc = default_bandwidth(m);
+  const PidGains g = design_model(m, wc), g0 = config_gains(cfg);
+  std::printf("model: K %.4f counts/s/du, tau %.4f ms, tau_fast %.3f ms, Coulomb %.1f du; wc %.1f rad/s\n",
+              m.k, 1e3 * m.tau, 1e3 * m.tau_fast, m.coulomb, wc);
+  std::printf("designed: Kp %.2f Ki %.0f Kd %.4f Tf %.1f us\n", g.kp, g.ki, g.kd, 1e6 * g.tf);
+  const double step = 400, dur = 0.3;
+  const StepMetrics t0 = truth_step(cfg, g0, step, dur), p0 = predict_step(m, g0, step, dur).metrics;
+  const StepMetrics t1 = truth_step(cfg, g, step, dur), p1 = predict_step(m, g, step, dur).metrics;
+  const auto show = [](const char* what, const StepMetrics& s) {
+    std::printf(
+        "%-22s overshoot %5.1f %%, settling %5.1f ms, rise %5.2f ms, ss error %+.1f counts, IAE %.3f\n", what,
+        s.overshoot_pct, 1e3 * s.settling_s, 1e3 * s.rise_s, s.ss_error, s.iae);
+  };
+  show("default, true plant", t0);
+  show("default, predicted", p0);
+  show("designed, true plant", t1);
+  show("designed, predicted", p1);
+  ASSERT_TRUE(t0.settled && t1.settled && p1.settled);
+  EXPECT_LE(t1.overshoot_pct, 10);
+  EXPECT_LT(t1.settling_s, t0.settling_s);
+  EXPECT_LE(std::fabs(t1.ss_error), 1);
+  // The prediction is what the board will show, within the model's error.
+  EXPECT_NEAR(p1.overshoot_pct, t1.overshoot_pct, 3);
+  EXPECT_NEAR(p1.settling_s, t1.settling_s, 0.15 * t1.settling_s);
+  EXPECT_NEAR(p0.overshoot_pct, t0.overshoot_pct, 3);
+  EXPECT_NEAR(p0.settling_s, t0.settling_s, 0.15 * t0.settling_s);
+}
+
+TEST(TuningDesign, PredictionHonoursTheOutputLimit) {
+  const AxisModel m{7.7, 7.2e-3, 0, 1e-4, 0, 0, 0};
+  const PidGains g = design_model(m, 300);
+  const Prediction full = predict_step(m, g, 2000, 0.2), lim = predict_step(m, g, 2000, 0.2, 5000);
+  ASSERT_EQ(full.y.size(), 2001u);
+  double umax = 0, ulim = 0;
+  for (size_t i = 0; i < full.u.size(); ++i) {
+    umax = std::max(umax, std::fabs(full.u[i]));
+    ulim = std::max(ulim, std::fabs(lim.u[i]));
+  }
+  EXPECT_LE(umax, 32767);
+  EXPECT_EQ(ulim, 5000);
+  // A fifth of the drive cannot accelerate the axis as fast.
+  ASSERT_TRUE(full.metrics.rose && lim.metrics.rose);
+  EXPECT_GT(lim.metrics.rise_s, full.metrics.rise_s);
+  EXPECT_THROW(predict_step(m, g, 0, 0.1), InputError);
+  EXPECT_THROW(predict_step(m, g, 100, -1), InputError);
+  EXPECT_THROW(predict_step(m, g, 100, 0.1, 40000), InputError);
 }
 
 }  // namespace
