@@ -56,14 +56,19 @@ struct RelayResult {
 // amplitude not above eps.
 RelayResult relay_analyse(const std::vector<double>& y, double ts, double d, double eps);
 
+// The rules were made for self-regulating plants. A position axis has an
+// integrator of its own, and a rule with Ti = Tu/2 puts a second one close
+// to the crossover: on the default axis the "no overshoot" variant
+// overshoots most (docs/tuning.md). Tyreus-Luyben's slow integral suits it
+// best and is the default.
 enum class RelayRule {
   ZieglerNichols,  // Kp 0.6 Ku, Ti Tu/2, Td Tu/8: quarter-decay, aggressive
   TyreusLuyben,    // Kp Ku/2.2, Ti 2.2 Tu, Td Tu/6.3: more damping, slow integral
-  NoOvershoot,     // Kp 0.2 Ku, Ti Tu/2, Td Tu/3 (the "no overshoot" ZN variant)
+  NoOvershoot,     // Kp 0.2 Ku, Ti Tu/2, Td Tu/3 (the ZN variant so named for self-regulating plants)
 };
 // Ki = Kp/Ti, Kd = Kp Td, Tf = Td / n_filter but at least ts (a filter faster
 // than the sample period only adds a sign-alternating pole).
-PidGains design_relay(const RelayResult& r, double ts, RelayRule rule = RelayRule::NoOvershoot,
+PidGains design_relay(const RelayResult& r, double ts, RelayRule rule = RelayRule::TyreusLuyben,
                       double n_filter = 10);
 
 // --- Excitation ---------------------------------------------------------------

@@ -379,6 +379,28 @@ TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
   EXPECT_NEAR(p0.settling_s, t0.settling_s, 0.15 * t0.settling_s);
 }
 
+// The relay method end to end on the true plant: the rules give stable loops;
+// the printed metrics are what docs/tuning.md compares.
+TEST(TuningDesign, RelayRulesCloseAStableLoop) {
+  const sim::AxisConfig cfg = default_x();
+  const double ts = cfg.pid.ts_s, d = 8192;
+  const RelayResult r = relay_analyse(relay_capture(cfg, true, d, 0, ts, 0.3), ts, d, 0);
+  const struct {
+    const char* name;
+    RelayRule rule;
+  } rules[] = {{"Ziegler-Nichols", RelayRule::ZieglerNichols},
+               {"Tyreus-Luyben", RelayRule::TyreusLuyben},
+               {"no overshoot", RelayRule::NoOvershoot}};
+  for (const auto& rr : rules) {
+    const PidGains g = design_relay(r, ts, rr.rule);
+    const StepMetrics t = truth_step(cfg, g, 400, 0.5);
+    std::printf("%-16s Kp %6.1f Ki %7.0f Kd %.4f Tf %5.1f us: overshoot %5.1f %%, settling %5.1f ms\n",
+                rr.name, g.kp, g.ki, g.kd, 1e6 * g.tf, t.overshoot_pct, 1e3 * t.settling_s);
+    EXPECT_TRUE(t.rose) << rr.name;
+    EXPECT_TRUE(t.settled) << rr.name;
+  }
+}
+
 TEST(TuningDesign, PredictionHonoursTheOutputLimit) {
   const AxisModel m{7.7, 7.2e-3, 0, 1e-4, 0, 0, 0};
   const PidGains g = design_model(m, 300);
