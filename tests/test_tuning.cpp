@@ -264,11 +264,14 @@ TEST(TuningIdentify, RecoversTheDefaultAxis) {
     for (const bool quantized : {false, true}) {
       const Capture c = excite(cfg, u, friction, quantized);
       const AxisModel m = identify(c.u, c.y, cfg.pid.ts_s, friction);
+      double excursion = 0;
+      for (double y : c.y) excursion = std::max(excursion, std::fabs(y));
       std::printf(
           "friction %-3s encoder %-9s: K %.4f (true %.4f, %+.2f %%), tau %.4f ms (true %.4f, %+.2f %%), "
-          "Coulomb %.1f du, fit rms %.3f counts, fast %.3f ms\n",
+          "Coulomb %.1f du, fit rms %.3f counts, fast %.3f ms, travel %.2f mm\n",
           friction ? "on" : "off", quantized ? "quantized" : "exact", m.k, tm.k, 100 * (m.k / tm.k - 1),
-          1e3 * m.tau, 1e3 * tm.tau, 100 * (m.tau / tm.tau - 1), m.coulomb, m.fit_rms, 1e3 * m.tau_fast);
+          1e3 * m.tau, 1e3 * tm.tau, 100 * (m.tau / tm.tau - 1), m.coulomb, m.fit_rms, 1e3 * m.tau_fast,
+          1e3 * excursion / sim::counts_per_m(cfg));
       EXPECT_NEAR(m.k, tm.k, 0.02 * tm.k);
       EXPECT_NEAR(m.tau, tm.tau, 0.03 * tm.tau);
       EXPECT_LT(m.fit_rms, 0.5);
@@ -372,6 +375,15 @@ TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
   EXPECT_LE(t1.overshoot_pct, 10);
   EXPECT_LT(t1.settling_s, t0.settling_s);
   EXPECT_LE(std::fabs(t1.ss_error), 1);
+  // Damping 1 or below at the same bandwidth: the PID's zeros add overshoot
+  // the poles do not show, which is why the default damping is 2.
+  for (const double zeta : {0.7, 1.0}) {
+    const PidGains gz = design_model(m, wc, zeta);
+    const StepMetrics tz = truth_step(cfg, gz, step, dur);
+    std::printf("zeta %.1f at the same wc: overshoot %.1f %% (true plant), %.1f %% (predicted)\n", zeta,
+                tz.overshoot_pct, predict_step(m, gz, step, dur).metrics.overshoot_pct);
+    EXPECT_GT(tz.overshoot_pct, 10);
+  }
   // The prediction is what the board will show, within the model's error.
   EXPECT_NEAR(p1.overshoot_pct, t1.overshoot_pct, 3);
   EXPECT_NEAR(p1.settling_s, t1.settling_s, 0.15 * t1.settling_s);
