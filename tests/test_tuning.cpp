@@ -254,6 +254,23 @@ TEST(TuningIdentify, ExactOnTheDiscreteModel) {
   }
 }
 
+TEST(TuningIdentify, RejectsCapturesThatDoNotFit) {
+  const sim::AxisConfig cfg = default_x();
+  const std::vector<double> u = prbs(4096, 10e-3, 0.5, cfg.pid.ts_s);
+  Capture c = excite(cfg, u, true, true);
+  EXPECT_THROW(identify(c.u, std::vector<double>(c.y.begin(), c.y.end() - 1), cfg.pid.ts_s), InputError);
+  EXPECT_THROW(identify({1, 2, 3}, {0, 0, 0}, cfg.pid.ts_s), InputError);
+  EXPECT_THROW(identify(c.u, c.y, 0), InputError);
+  // No drive, no motion: nothing to identify.
+  EXPECT_THROW(identify(std::vector<double>(c.u.size(), 0.0), std::vector<double>(c.y.size(), 0.0), 1e-4),
+               InputError);
+  // Encoder wired backwards: the drive moves the axis the other way.
+  for (double& y : c.y) y = -y;
+  EXPECT_THROW(identify(c.u, c.y, cfg.pid.ts_s), InputError);
+  c.y[7] = std::nan("");
+  EXPECT_THROW(identify(c.u, c.y, cfg.pid.ts_s), InputError);
+}
+
 TEST(TuningIdentify, RecoversTheDefaultAxis) {
   const sim::AxisConfig cfg = default_x();
   const TrueModel tm = true_model(cfg);
