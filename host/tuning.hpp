@@ -73,6 +73,15 @@ PidGains design_relay(const RelayResult& r, double ts, RelayRule rule = RelayRul
 
 // --- Excitation ---------------------------------------------------------------
 
+// What the tests validate on the default machine (docs/tuning.md): a
+// balanced PRBS of 4096 drive units (6 V at 48 V) with 10 ms bits (longer
+// than the axis' tau) for 1 s, and a relay of 8192 drive units without
+// hysteresis for 0.3 s (about 30 periods).
+struct TuneDefaults {
+  static constexpr double prbs_amplitude = 4096, prbs_bit_s = 10e-3, prbs_duration_s = 1.0;
+  static constexpr double relay_amplitude = 8192, relay_hysteresis = 0, relay_duration_s = 0.3;
+};
+
 // A maximal-length PRBS (10-bit LFSR, period 1023 bits) of +-amplitude, each
 // bit held for round(bit_s / ts) samples, duration_s long. balanced: every
 // bit is followed by its negation, so that the open-loop position returns

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <random>
 
 #include "dc_motor.hpp"
 #include "errors.hpp"
@@ -118,6 +119,26 @@ TEST(TuningRelay, HysteresisMovesThePointAsTheDescribingFunctionSays) {
                 eps, r.amplitude, 1e3 * r.tu, r.phase_deg, phase, kPi * r.amplitude / (4 * d), std::abs(g));
     EXPECT_NEAR(r.phase_deg, phase, 3);
     EXPECT_NEAR(kPi * r.amplitude / (4 * d), std::abs(g), 0.05 * std::abs(g));
+  }
+}
+
+// Measurement noise of +-2 counts (a noisy encoder line, vibration) on top
+// of the quantization: the crossing detector needs a quarter amplitude
+// below the centre before it counts a period, and the amplitude is a
+// least-squares fit, so both barely move.
+TEST(TuningRelay, NoiseBarelyMovesTheEstimate) {
+  const sim::AxisConfig cfg = default_x();
+  const double ts = cfg.pid.ts_s, d = TuneDefaults::relay_amplitude;
+  const std::vector<double> y = relay_capture(cfg, true, d, 0, ts, TuneDefaults::relay_duration_s);
+  const RelayResult clean = relay_analyse(y, ts, d, 0);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> noise(-2, 2);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> yn = y;
+    for (double& v : yn) v += noise(rng);
+    const RelayResult r = relay_analyse(yn, ts, d, 0);
+    EXPECT_NEAR(r.tu, clean.tu, 0.02 * clean.tu);
+    EXPECT_NEAR(r.ku, clean.ku, 0.03 * clean.ku);
   }
 }
 
@@ -276,7 +297,8 @@ TEST(TuningIdentify, RecoversTheDefaultAxis) {
   const TrueModel tm = true_model(cfg);
   // The excitation docs/tuning.md recommends: balanced PRBS, 4096 drive
   // units (6 V), 10 ms bits (longer than tau), 1 s.
-  const std::vector<double> u = prbs(4096, 10e-3, 1.0, cfg.pid.ts_s);
+  const std::vector<double> u = prbs(TuneDefaults::prbs_amplitude, TuneDefaults::prbs_bit_s,
+                                     TuneDefaults::prbs_duration_s, cfg.pid.ts_s);
   for (const bool friction : {false, true}) {
     for (const bool quantized : {false, true}) {
       const Capture c = excite(cfg, u, friction, quantized);
@@ -369,7 +391,10 @@ PidGains config_gains(const sim::AxisConfig& cfg) {
 // (400 counts) is the one docs/plant.md measures the default gains with.
 TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
   const sim::AxisConfig cfg = default_x();
-  const Capture c = excite(cfg, prbs(4096, 10e-3, 1.0, cfg.pid.ts_s), true, true);
+  const Capture c = excite(cfg,
+                           prbs(TuneDefaults::prbs_amplitude, TuneDefaults::prbs_bit_s,
+                                TuneDefaults::prbs_duration_s, cfg.pid.ts_s),
+                           true, true);
   const AxisModel m = identify(c.u, c.y, cfg.pid.ts_s);
   const double wc = default_bandwidth(m);
   const PidGains g = design_model(m, wc), g0 = config_gains(cfg);
