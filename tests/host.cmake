@@ -17,3 +17,9 @@ mc_gtest(test_cli_interp unit test_cli_interp.cpp)
 target_link_libraries(test_cli_interp PRIVATE nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_interp PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_cli_interp motionctl)
+
+mc_gtest(test_step_metrics unit test_step_metrics.cpp)
+target_link_libraries(test_step_metrics PRIVATE mc_host)
+
+mc_gtest(test_tuning unit test_tuning.cpp)
+target_link_libraries(test_tuning PRIVATE mc_host mc_sim)
