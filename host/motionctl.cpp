@@ -8,6 +8,7 @@
 #include <iostream>
 #include <string>
 
+#include "board_cli.hpp"
 #include "commands.hpp"
 #include "errors.hpp"
 
@@ -55,6 +56,7 @@ int run(int argc, char** argv) {
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
   app.require_subcommand(0, 1);
+  mc::host::cli::add_global_options(app);
 
   mc::host::cli::add_coeffs_command(app);
   mc::host::cli::add_interp_command(app);
@@ -62,6 +64,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_plant_command(app);
   mc::host::cli::add_cosim_command(app);
   mc::host::cli::add_bench_command(app);
+  mc::host::cli::add_sim_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");
