@@ -63,7 +63,9 @@ struct VirtualBoard::Impl {
       throw mc::host::InputError("axes (" + m.source + ")", std::to_string(m.axes.size()),
                                  "at most " + std::to_string(kBoardAxes) + " (the board's x, y, z)");
     ctx = std::make_unique<VerilatedContext>();
-    ctx->randReset(2);
+    // An iCE40 configures every flip-flop and block RAM to zero; a seed
+    // asks for Verilator's random power-up state instead.
+    ctx->randReset(seed ? 2 : 0);
     ctx->randSeed(int(seed & 0x7fffffff));
     top = std::make_unique<Vmotioncore_icebreaker>(ctx.get(), "board");
     Vmotioncore_icebreaker& t = *top;

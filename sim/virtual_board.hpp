@@ -35,8 +35,9 @@ constexpr uint64_t kMaxWatchdogClocks = uint64_t(1) << 24;
 
 class VirtualBoard {
  public:
-  // seed: Verilator's random power-up state of uninitialized registers.
-  explicit VirtualBoard(const MachineConfig& m, uint32_t seed = 1);
+  // Powers up as the FPGA does, every register and RAM zero; seed != 0:
+  // Verilator's random power-up state instead (seeded), to flush out reset bugs.
+  explicit VirtualBoard(const MachineConfig& m, uint32_t seed = 0);
   ~VirtualBoard();
   VirtualBoard(const VirtualBoard&) = delete;
   VirtualBoard& operator=(const VirtualBoard&) = delete;
