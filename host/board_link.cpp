@@ -147,7 +147,7 @@ proto::Reply BoardLink::transact(proto::Frame req) {
     }
     const auto sent = Clock::now();
     s_.write(bytes.data(), bytes.size());
-    const auto wait = std::min(o_.max_timeout, timeout() * (1 << std::min(attempt, 4)));
+    const auto wait = std::min(o_.max_timeout, timeout() * (1 << std::min(attempt, 2)));
     proto::Reply r;
     if (await(req, sent + wait, r)) {
       if (attempt == 0) note_rtt(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());

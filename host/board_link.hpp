@@ -5,7 +5,7 @@
 // timeout the very same frame goes out again. The board applies a frame at
 // most once and answers a repeat with DUP, so a DUP to our pending request
 // means "done": nothing is lost and nothing applied twice. The timeout
-// follows the measured round trip (srtt + 4 rttvar, doubled per retry).
+// follows the measured round trip (srtt + 4 rttvar, doubled per retry up to 4x).
 // After max_tries the link gives up with "board at PORT does not answer
 // after N tries"; when what came back was bytes without a single valid
 // frame, "... answers garbage". Telemetry frames arriving meanwhile are
@@ -30,8 +30,8 @@ class BoardError : public std::runtime_error {
 };
 
 struct LinkOptions {
-  int max_tries = 8;
-  std::chrono::milliseconds first_timeout{300};  // before any round trip was measured
+  int max_tries = 6;
+  std::chrono::milliseconds first_timeout{200};  // before any round trip was measured
   std::chrono::milliseconds min_timeout{30};
   std::chrono::milliseconds max_timeout{2000};
   size_t max_telemetry = 200000;  // frames kept; older ones are dropped

@@ -136,6 +136,7 @@ std::vector<int> axes_of(const std::string& axis, int naxes) {
 }
 
 void enable(const std::string& axis) {
+  if (!axis.empty()) parse_axis(axis);  // a bad name is an error before any port is opened
   Board b = open_board();
   BoardLink& l = *b.link;
   const int naxes = int(l.read(br::INFO) & 0xF);
@@ -159,6 +160,7 @@ void enable(const std::string& axis) {
 }
 
 void disable(const std::string& axis) {
+  if (!axis.empty()) parse_axis(axis);
   Board b = open_board();
   BoardLink& l = *b.link;
   const int naxes = int(l.read(br::INFO) & 0xF);

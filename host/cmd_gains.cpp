@@ -67,6 +67,7 @@ int board_axis(BoardLink& l, const std::string& name) {
 }
 
 void show(const GainsOptions& o) {
+  parse_axis(o.axis);  // a bad name is an error before any port is opened
   Board b = open_board();
   const int a = board_axis(*b.link, o.axis);
   const AxisGains g = read_gains(*b.link, a);
@@ -94,6 +95,7 @@ AxisGains apply(BoardLink& l, int a, const PidGains& g, const CoreLimits& lim) {
 }
 
 void set(const GainsOptions& o) {
+  parse_axis(o.axis);
   Board b = open_board();
   BoardLink& l = *b.link;
   const int a = board_axis(l, o.axis);
