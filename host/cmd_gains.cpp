@@ -124,7 +124,10 @@ void set(const GainsOptions& o) {
   }
   if (!o.ts.empty() || o.defaults) {
     const uint32_t old = read_ts_cycles(l);
-    if (std::llround(g.ts * double(l.read(br::CLK_HZ))) != old)
+    bool others = false;  // another axis has gains designed for the old period
+    for (int x = 0; x < int(l.read(br::INFO) & 0xF); ++x)
+      others = others || (x != a && l.read(pid_reg::addr(uint8_t(x), pid_reg::KP)) != 0);
+    if (others && std::llround(g.ts * double(l.read(br::CLK_HZ))) != old)
       warn("Ts is shared by every axis: the other axes' gains now run at the new period (set them again)");
   }
   const AxisGains now = apply(l, a, g, cur.limits);

@@ -32,6 +32,7 @@ struct ServeOptions {
   std::string idle_exit = "0";
   std::string status_every = "5";
   bool no_register = false;
+  std::string config;  // overrides the global --config
 };
 
 void install_handlers() {
@@ -48,6 +49,7 @@ void serve(const ServeOptions& o) {
   const double idle_min = parse_number(o.idle_exit, "--idle-exit");
   const double every = parse_duration(o.status_every, "--status-every");
   if (idle_min < 0) throw InputError("--idle-exit", o.idle_exit, "minutes >= 0 (0: never)");
+  if (!o.config.empty()) global_options().config = o.config;
   const mc::sim::MachineConfig m = machine();
   mc::sim::VirtualBoard board(m);
   mc::sim::Pty pty;
@@ -117,6 +119,7 @@ void add_sim_command(CLI::App& app) {
       "pins, and its UART bit by bit on a pseudo-terminal: 'motionctl --port PTY status' talks to it.\n"
       "Paced to the wall clock (never ahead of it; slower when the model is slower); the board's watchdog\n"
       "runs on board time. Status lines go to stderr. SIGINT or SIGTERM stops it.");
+  srv->add_option("--config", o->config, "Machine TOML (the same as the global --config)")->type_name("FILE");
   srv->add_flag("--fast", o->fast, "Do not pace: run as fast as the model goes");
   srv->add_option("--idle-exit", o->idle_exit, "Exit after this many minutes without host bytes (0: never)")
       ->type_name("MIN");

@@ -310,7 +310,8 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     if (opt.idle_exit_s > 0 && seconds_since(last_host) > opt.idle_exit_s) break;
     report(false);
   }
-  report(true);
+  st.wall_s = seconds_since(t0);
+  st.board_s = board.board_seconds();
   return st;
 }
 
