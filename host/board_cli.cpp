@@ -102,6 +102,7 @@ SimServer start_sim_server(const std::string& config) {
       args.insert(args.begin() + 1, {"--config", config});
     }
     std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
     ::execv("/proc/self/exe", argv.data());
@@ -121,7 +122,7 @@ SimServer start_sim_server(const std::string& config) {
 
 std::string sim_state_dir() {
   const char* xdg = std::getenv("XDG_RUNTIME_DIR");
-  const std::string dir =
+  std::string dir =
       (xdg && *xdg) ? std::string(xdg) + "/motionctl" : "/tmp/motionctl-" + std::to_string(::getuid());
   if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST)
     throw std::runtime_error("cannot create " + dir + ": " + std::strerror(errno));

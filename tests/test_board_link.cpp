@@ -69,6 +69,7 @@ TEST(BoardLink, InjectedByteErrorsLoseAndDuplicateNothing) {
   for (int frame = 0; frame < 40; ++frame) {
     std::vector<seg::Words> batch;
     const int n = 1 + int(rng() % 6);
+    batch.reserve(size_t(n));
     for (int k = 0; k < n; ++k) batch.push_back(seg::pack(host::plan_dwell({0, 0, 0}, 20e-6).seg));
     while (!link.segments(batch)) {
     }

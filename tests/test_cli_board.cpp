@@ -35,8 +35,11 @@ class PrivateRuntimeDir {
     ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
   }
   ~PrivateRuntimeDir() {
-    run({"sim", "stop"});
-    std::system(("rm -rf '" + dir_ + "'").c_str());
+    try {
+      run({"sim", "stop"});
+      std::system(("rm -rf '" + dir_ + "'").c_str());
+    } catch (...) {  // a destructor must not throw; the directory stays behind
+    }
   }
 
  private:
@@ -47,6 +50,7 @@ pid_t spawn(const std::vector<std::string>& args, int out_fd) {
   std::vector<std::string> storage{MOTIONCTL_PATH};
   storage.insert(storage.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(storage.size() + 1);
   for (auto& s : storage) argv.push_back(s.data());
   argv.push_back(nullptr);
   posix_spawn_file_actions_t fa;
