@@ -50,8 +50,8 @@ int fail(const std::string& msg, int code) {
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "MotionCore host tool: design controller coefficients, preview interpolated paths and run the "
-      "axis plant model for the FPGA motion core.",
+      "MotionCore host tool: drive and tune the board (--port DEV) or the virtual board (--sim), design "
+      "controller coefficients, preview interpolated paths and run the axis plant model.",
       "motionctl"};
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
