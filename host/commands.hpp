@@ -16,5 +16,8 @@ void add_jitter_command(CLI::App& app);
 void add_plant_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_cosim_command(CLI::App& app);
+void add_sim_command(CLI::App& app);
+void add_board_commands(CLI::App& app);
+void add_gains_commands(CLI::App& app);
 
 }  // namespace mc::host::cli

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <string>
 
+#include "board_cli.hpp"
 #include "commands.hpp"
 #include "errors.hpp"
 
@@ -49,12 +50,13 @@ int fail(const std::string& msg, int code) {
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "MotionCore host tool: design controller coefficients, preview interpolated paths and run the "
-      "axis plant model for the FPGA motion core.",
+      "MotionCore host tool: drive and tune the board (--port DEV) or the virtual board (--sim), design "
+      "controller coefficients, preview interpolated paths and run the axis plant model.",
       "motionctl"};
   // At most one command; "none" is reported by us, so that an unknown command
   // name is not misreported as a missing one.
   app.require_subcommand(0, 1);
+  mc::host::cli::add_global_options(app);
 
   mc::host::cli::add_coeffs_command(app);
   mc::host::cli::add_interp_command(app);
@@ -62,6 +64,9 @@ int run(int argc, char** argv) {
   mc::host::cli::add_plant_command(app);
   mc::host::cli::add_cosim_command(app);
   mc::host::cli::add_bench_command(app);
+  mc::host::cli::add_sim_command(app);
+  mc::host::cli::add_board_commands(app);
+  mc::host::cli::add_gains_commands(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");

@@ -9,6 +9,7 @@
 //               if (rx.has_byte()) use(rx.take());
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <stdexcept>
@@ -32,6 +33,8 @@ class UartSender {
   bool pin() const { return level_; }
   // Nothing queued and the line idle.
   bool idle() const { return q_.empty() && bit_ < 0; }
+  // Bytes not yet fully sent, the one on the line included.
+  size_t queued() const { return q_.size() + (bit_ >= 0 ? 1 : 0); }
   // Advance one clock.
   void clock() {
     if (bit_ < 0) {

@@ -65,10 +65,7 @@ target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_sim)
 
 # The iCEBreaker top with its link: a host speaks the protocol bit by bit on
 # the UART pins (tests/board_harness.hpp, sim/uart_model.hpp).
-set(MC_BOARD_RTL motioncore_icebreaker.v mc_board.v mc_regs.v mc_safety.v link_rx.v link_tx.v uart_rx.v
-  uart_tx.v crc16_ccitt.v)
-list(TRANSFORM MC_BOARD_RTL PREPEND ${MC_RTL_DIR}/)
-mc_verilate(vboard TOP motioncore_icebreaker SOURCES ${MC_BOARD_RTL} ${MC_MOTION_RTL})
+# (The Verilated top, vboard, is the virtual board's too: sim/CMakeLists.txt.)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
 target_link_libraries(test_board_rtl PRIVATE mc_hls mc_host vboard)
 target_include_directories(test_board_rtl PRIVATE ${CMAKE_SOURCE_DIR}/sim)

@@ -1,0 +1,319 @@
+// motionctl status | enable | disable | clear-fault | jog | move: the board
+// commands that need only the link (--port DEV or --sim before the command).
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "board_cli.hpp"
+#include "board_ops.hpp"
+#include "commands.hpp"
+#include "errors.hpp"
+#include "pid_regs.hpp"
+#include "units.hpp"
+
+namespace mc::host::cli {
+namespace {
+
+namespace br = board::reg;
+namespace bb = board::bits;
+
+// Counts per metre of each board axis the machine config describes (0: none).
+std::array<double, 3> scales() {
+  std::array<double, 3> s{};
+  const mc::sim::MachineConfig m = machine();
+  for (size_t a = 0; a < m.axes.size() && a < 3; ++a) s[a] = mc::sim::counts_per_m(m.axes[a]);
+  return s;
+}
+
+void note(const std::string& s) {
+  std::cerr << "motionctl: note: " << s << '\n';
+}
+
+std::string watchdog_text(const BoardState& s) {
+  char b[200];
+  std::snprintf(b, sizeof b, "%s (WDOG = %u cycles)", format_duration(double(s.wdog) / s.clk_hz).c_str(),
+                unsigned(s.wdog));
+  return b;
+}
+
+// ---- status -------------------------------------------------------------------
+void status(bool json) {
+  Board b = open_board();
+  const BoardState s = read_state(*b.link);
+  const auto scale = scales();
+  const LinkCounters& c = b.link->counters();
+  if (json) {
+    nlohmann::ordered_json j;
+    j["port"] = b.port->name();
+    j["id"] = s.id;
+    j["clock_hz"] = s.clk_hz;
+    j["ts_s"] = s.ts_s();
+    j["ts_cycles"] = s.ts_cycles;
+    j["watchdog_s"] = double(s.wdog) / s.clk_hz;
+    j["armed"] = s.armed();
+    j["fault"] = s.fault;
+    j["faults"] = nlohmann::json::array();
+    if (s.fault) {
+      std::stringstream names(fault_names(s.fault));
+      for (std::string n; std::getline(names, n, ',');) j["faults"].push_back(n.substr(n[0] == ' '));
+    }
+    j["interpolator"] = {{"busy", bool(s.ip_stat >> bb::IS_BUSY & 1)},
+                         {"words_queued", s.ip_stat & 0xFFFF},
+                         {"segments_done", s.ip_segs & 0xFFFF}};
+    j["axes"] = nlohmann::json::array();
+    for (int a = 0; a < s.naxes; ++a) {
+      const AxisState& x = s.axes[size_t(a)];
+      nlohmann::ordered_json ja;
+      ja["axis"] = axis_name(a);
+      ja["position"] = x.pos;
+      ja["command"] = x.cmd;
+      ja["error"] = x.err;
+      ja["output"] = x.u;
+      ja["saturated"] = x.sat;
+      ja["enabled"] = x.pid_en;
+      ja["drive"] = x.drv_en;
+      if (scale[size_t(a)] > 0) {
+        ja["position_mm"] = x.pos / scale[size_t(a)] * 1e3;
+        ja["command_mm"] = x.cmd / scale[size_t(a)] * 1e3;
+      }
+      j["axes"].push_back(ja);
+    }
+    j["link"] = {{"board_crc_errors", s.link_crc & 0xFFFF},  {"board_framing_errors", s.link_crc >> 16},
+                 {"board_refused", s.link_cmd & 0xFFFF},     {"board_duplicates", s.link_cmd >> 16},
+                 {"board_junk_bytes", s.link_junk & 0xFFFF}, {"host_requests", c.requests},
+                 {"host_retransmits", c.retransmits},        {"host_crc_errors", c.rx.crc},
+                 {"host_round_trip_ms", c.srtt_ms}};
+    std::cout << j.dump(2) << '\n';
+    return;
+  }
+  char line[300];
+  std::cout << "board at " << b.where << ": clock " << s.clk_hz << " Hz, Ts " << format_duration(s.ts_s())
+            << " (" << s.ts_cycles << " cycles), watchdog " << watchdog_text(s) << '\n';
+  std::cout << "drives " << (s.armed() ? "ARMED" : "off") << ", faults: " << fault_names(s.fault)
+            << ", interpolator " << ((s.ip_stat >> bb::IS_BUSY & 1) ? "busy" : "idle") << " ("
+            << (s.ip_stat & 0xFFFF) << " words queued, " << (s.ip_segs & 0xFFFF) << " segments done)\n";
+  std::snprintf(line, sizeof line, "%-4s %12s %12s %8s %7s %4s %7s %5s %12s\n", "axis", "position", "command",
+                "error", "output", "sat", "enabled", "drive", "position mm");
+  std::cout << line;
+  for (int a = 0; a < s.naxes; ++a) {
+    const AxisState& x = s.axes[size_t(a)];
+    char mm[32] = "-";
+    if (scale[size_t(a)] > 0) std::snprintf(mm, sizeof mm, "%.4f", x.pos / scale[size_t(a)] * 1e3);
+    std::snprintf(line, sizeof line, "%-4s %12d %12d %8d %7d %4s %7s %5s %12s\n", axis_name(a), int(x.pos),
+                  int(x.cmd), int(x.err), int(x.u), x.sat ? "yes" : "no", x.pid_en ? "yes" : "no",
+                  x.drv_en ? "on" : "off", mm);
+    std::cout << line;
+  }
+  std::snprintf(line, sizeof line,
+                "link: board counted %u CRC errors, %u framing errors, %u refused, %u duplicates, %u junk "
+                "bytes; this run %llu requests, %llu retransmits, round trip %.1f ms\n",
+                unsigned(s.link_crc & 0xFFFF), unsigned(s.link_crc >> 16), unsigned(s.link_cmd & 0xFFFF),
+                unsigned(s.link_cmd >> 16), unsigned(s.link_junk & 0xFFFF),
+                static_cast<unsigned long long>(c.requests), static_cast<unsigned long long>(c.retransmits),
+                c.srtt_ms);
+  std::cout << line;
+}
+
+// ---- enable / disable / clear-fault ------------------------------------------------
+std::vector<int> axes_of(const std::string& axis, int naxes) {
+  if (!axis.empty()) {
+    const int a = parse_axis(axis);
+    if (a >= naxes)
+      throw InputError("--axis", quote(axis), "one of the board's " + std::to_string(naxes) + " axes");
+    return {a};
+  }
+  // Every axis the machine has: a board axis without a motor stays off.
+  std::vector<int> v;
+  const auto sc = scales();
+  for (int a = 0; a < naxes; ++a)
+    if (sc[size_t(a)] > 0) v.push_back(a);
+  return v;
+}
+
+void enable(const std::string& axis) {
+  if (!axis.empty()) parse_axis(axis);  // a bad name is an error before any port is opened
+  Board b = open_board();
+  BoardLink& l = *b.link;
+  const int naxes = int(l.read(br::INFO) & 0xF);
+  const std::vector<int> axes = axes_of(axis, naxes);
+  for (int a : axes) {
+    if (l.read(pid_reg::addr(uint8_t(a), pid_reg::KP)) == 0 &&
+        l.read(pid_reg::addr(uint8_t(a), pid_reg::KI)) == 0)
+      throw InputError("axis " + std::string(axis_name(a)), "Kp = Ki = 0",
+                       "gains first: 'motionctl gains set --axis " + std::string(axis_name(a)) +
+                           " --defaults' or 'motionctl config load FILE'");
+  }
+  arm(l, note);
+  for (int a : axes) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1, 1);
+  const BoardState s = read_state(l);
+  std::string names;
+  for (int a : axes) names += (names.empty() ? "" : ", ") + std::string(axis_name(a));
+  std::cout << "enabled " << names << "; drives armed.\n"
+            << "The board's watchdog turns the drives off " << watchdog_text(s)
+            << " after the last frame: they go off when this command exits, by design.\n"
+            << "jog and move arm them again for their motion.\n";
+}
+
+void disable(const std::string& axis) {
+  if (!axis.empty()) parse_axis(axis);
+  Board b = open_board();
+  BoardLink& l = *b.link;
+  const int naxes = int(l.read(br::INFO) & 0xF);
+  if (axis.empty()) l.write(br::CTRL, 0);
+  for (int a : axes_of(axis, naxes)) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 0, 1);
+  std::cout << (axis.empty() ? "drives off, every axis disabled\n" : "disabled " + axis + "\n");
+}
+
+void clear_fault() {
+  Board b = open_board();
+  BoardLink& l = *b.link;
+  const uint32_t f = l.read(br::FAULT);
+  if (f == 0) {
+    std::cout << "no fault latched\n";
+    return;
+  }
+  l.write(br::FAULT, f);
+  const uint32_t still = l.read(br::FAULT);
+  if (still) throw BoardError("fault still latched, its cause is present: " + fault_names(still));
+  std::cout << "cleared: " << fault_names(f) << " (the drives stay off until enable, jog or move)\n";
+}
+
+// ---- jog / move -------------------------------------------------------------------
+struct MotionOptions {
+  std::string axis, distance, feed, target;
+};
+
+void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::array<double, 3>&)>& target,
+             const std::string& feed_text) {
+  const double feed_mm_min = parse_number(feed_text, "--feed");
+  if (!(feed_mm_min > 0)) throw InputError("--feed", quote(feed_text), "a feed above 0 mm/min");
+  const auto scale = scales();
+  const Vec3 from = arm(l, note);
+  const Vec3 to = target(from, scale);
+  // The feed along the path: the axes share one scale in a sane machine; the
+  // first moving axis sets it.
+  double cpm = 0;
+  for (int a = 0; a < 3; ++a)
+    if (to[size_t(a)] != from[size_t(a)] && cpm == 0) cpm = scale[size_t(a)];
+  if (cpm == 0) {
+    std::cout << "already there\n";
+    return;
+  }
+  const double clk = double(l.read(br::CLK_HZ));
+  const auto segs = plan_move(from, to, feed_mm_min / 60e3 * cpm, clk);
+  run_segments(l, segs);
+  std::cout << "done:";
+  for (int a = 0; a < 3; ++a) {
+    if (scale[size_t(a)] == 0) continue;
+    const int32_t pos = int32_t(l.read(br::axis(a, br::AX_POS)));
+    char b[96];
+    std::snprintf(b, sizeof b, " %s %.4f mm (command %.4f)", axis_name(a), pos / scale[size_t(a)] * 1e3,
+                  double(to[size_t(a)]) / scale[size_t(a)] * 1e3);
+    std::cout << b;
+  }
+  std::cout << '\n';
+}
+
+void require_enabled(BoardLink& l, int a) {
+  if (!(l.read(pid_reg::addr(uint8_t(a), pid_reg::CTRL)) & 1))
+    throw InputError(
+        "axis " + std::string(axis_name(a)), "disabled",
+        "an enabled axis: run 'motionctl enable --axis " + std::string(axis_name(a)) + "' first");
+}
+
+void jog(const MotionOptions& o) {
+  const int a = parse_axis(o.axis);
+  const double mm = parse_number(o.distance, "--distance");
+  if (scales()[size_t(a)] == 0)
+    throw InputError("--axis", quote(o.axis), "an axis of the machine config (" + machine().source + ")");
+  Board b = open_board();
+  require_enabled(*b.link, a);
+  move_to(
+      *b.link,
+      [&](const Vec3& from, const std::array<double, 3>& s) {
+        Vec3 to = from;
+        to[size_t(a)] += std::llround(mm * 1e-3 * s[size_t(a)]);
+        return to;
+      },
+      o.feed);
+}
+
+void move(const MotionOptions& o) {
+  std::vector<double> mm;
+  std::stringstream ss(o.target);
+  for (std::string part; std::getline(ss, part, ',');) mm.push_back(parse_number(part, "target"));
+  if (mm.size() < 2 || mm.size() > 3) throw InputError("target", quote(o.target), "X,Y or X,Y,Z in mm");
+  const auto sc = scales();
+  for (size_t a = 0; a < mm.size(); ++a)
+    if (sc[a] == 0)
+      throw InputError("target", quote(o.target),
+                       "no coordinate for axis " + std::string(axis_name(int(a))) +
+                           ", which the machine config (" + machine().source + ") does not describe");
+  Board b = open_board();
+  for (size_t a = 0; a < mm.size(); ++a) require_enabled(*b.link, int(a));
+  move_to(
+      *b.link,
+      [&](const Vec3& from, const std::array<double, 3>& s) {
+        Vec3 to = from;
+        for (size_t a = 0; a < mm.size(); ++a) to[a] = std::llround(mm[a] * 1e-3 * s[a]);
+        return to;
+      },
+      o.feed);
+}
+
+constexpr const char* kBoardFooter =
+    "Talks to the board: give --port DEV (a real board) or --sim (the virtual board) before the command.";
+
+}  // namespace
+
+void add_board_commands(CLI::App& app) {
+  auto json = std::make_shared<bool>(false);
+  CLI::App* st =
+      app.add_subcommand("status", "Board state: per axis position, command, error, output; faults");
+  st->footer(kBoardFooter);
+  st->add_flag("--json", *json, "One JSON object instead of the table");
+  st->callback([json] { status(*json); });
+
+  auto axis = std::make_shared<std::string>();
+  CLI::App* en = app.add_subcommand("enable", "Enable the PID of an axis (default: all) and arm the drives");
+  en->footer(
+      std::string(kBoardFooter) +
+      "\nThe watchdog turns the drives off one WDOG period (100 ms by default) after the last frame, so\n"
+      "they go off when this command exits: the intended safety behaviour. jog and move arm again.");
+  en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")->type_name("AXIS");
+  en->callback([axis] { enable(*axis); });
+
+  auto daxis = std::make_shared<std::string>();
+  CLI::App* dis = app.add_subcommand("disable", "Disable the PID of an axis; without --axis also disarm");
+  dis->footer(kBoardFooter);
+  dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")->type_name("AXIS");
+  dis->callback([daxis] { disable(*daxis); });
+
+  CLI::App* cf = app.add_subcommand("clear-fault", "Clear the latched faults whose cause is gone");
+  cf->footer(kBoardFooter);
+  cf->callback([] { clear_fault(); });
+
+  auto jo = std::make_shared<MotionOptions>();
+  CLI::App* jg = app.add_subcommand("jog", "Move one axis by a distance at a feed, and wait until done");
+  jg->footer(std::string(kBoardFooter) +
+             "\nArms the drives (clearing a watchdog fault left by the previous command), starts from where\n"
+             "the axes are, and keeps the link alive until the move is done.");
+  jg->add_option("--axis", jo->axis, "x, y or z")->required()->type_name("AXIS");
+  jg->add_option("--distance", jo->distance, "mm, signed")->required()->type_name("MM");
+  jg->add_option("--feed", jo->feed, "mm/min along the path")->required()->type_name("MM/MIN");
+  jg->callback([jo] { jog(*jo); });
+
+  auto mo = std::make_shared<MotionOptions>();
+  CLI::App* mv = app.add_subcommand("move", "Move to X,Y[,Z] (mm, machine coordinates) in a straight line");
+  mv->footer(jg->get_footer());
+  mv->add_option("target", mo->target, "X,Y or X,Y,Z in mm")->required()->type_name("X,Y[,Z]");
+  mv->add_option("--feed", mo->feed, "mm/min along the path")->required()->type_name("MM/MIN");
+  mv->callback([mo] { move(*mo); });
+}
+
+}  // namespace mc::host::cli

@@ -1,0 +1,198 @@
+// motionctl's board commands against the virtual board, as a user runs
+// them: gains survive between runs (--sim keeps one server), a CLI killed
+// mid-move trips the board's watchdog and the drives go off, and bad
+// arguments, an absent port and a board that does not answer each give one
+// error line and a non-zero exit.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli_run.hpp"
+
+namespace mc::test {
+namespace {
+
+using nlohmann::json;
+
+// A private runtime directory, so that --sim finds only this test's server.
+class PrivateRuntimeDir {
+ public:
+  PrivateRuntimeDir() {
+    char tmpl[] = "/tmp/motionctl-test-XXXXXX";
+    dir_ = ::mkdtemp(tmpl);
+    ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
+  }
+  ~PrivateRuntimeDir() {
+    try {
+      run({"sim", "stop"});
+      std::system(("rm -rf '" + dir_ + "'").c_str());
+    } catch (...) {  // a destructor must not throw; the directory stays behind
+    }
+  }
+
+ private:
+  std::string dir_;
+};
+
+pid_t spawn(const std::vector<std::string>& args, int out_fd) {
+  std::vector<std::string> storage{MOTIONCTL_PATH};
+  storage.insert(storage.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  argv.reserve(storage.size() + 1);
+  for (auto& s : storage) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  if (out_fd >= 0) posix_spawn_file_actions_adddup2(&fa, out_fd, 1);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("posix_spawn failed");
+  return pid;
+}
+
+// `motionctl sim serve --fast` in its own process; the PTY path from its first line.
+class Server {
+ public:
+  Server() {
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+    pid_ = spawn({"sim", "serve", "--fast", "--no-register"}, fds[1]);
+    if (pid_ <= 0) throw std::runtime_error("no server");
+    ::close(fds[1]);
+    char c;
+    while (::read(fds[0], &c, 1) == 1 && c != '\n') pty_ += c;
+    ::close(fds[0]);
+  }
+  ~Server() {
+    if (pid_ <= 0) return;  // kill(-1) would signal every process we own
+    ::kill(pid_, SIGTERM);
+    ::waitpid(pid_, nullptr, 0);
+  }
+  const std::string& pty() const { return pty_; }
+  // Stops it; true when it exited cleanly.
+  bool stop() {
+    if (pid_ <= 0) return false;
+    ::kill(pid_, SIGTERM);
+    int st = 0;
+    ::waitpid(pid_, &st, 0);
+    pid_ = -1;
+    return WIFEXITED(st) && WEXITSTATUS(st) == 0;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  std::string pty_;
+};
+
+json run_json(const std::vector<std::string>& args) {
+  const Result r = run(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return json::parse(r.out);
+}
+
+void expect_ok(const std::vector<std::string>& args) {
+  const Result r = run(args);
+  std::string cmd;
+  for (const auto& a : args) cmd += " " + a;
+  ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.err;
+}
+
+void expect_near_rel(double got, double want, const char* what) {
+  EXPECT_NEAR(got, want, 1e-5 * std::fabs(want) + 1e-12) << what;
+}
+
+TEST(CliBoard, GainsRoundTripThroughTheVirtualBoard) {
+  PrivateRuntimeDir rt;
+  expect_ok({"--sim", "gains", "set", "--axis", "X", "--kp", "50", "--ki", "2000", "--kd", "0.2", "--tf",
+             "300us", "--ts", "200us", "--limit", "20000"});
+  // A second process: the same board.
+  json g = run_json({"--sim", "gains", "show", "--axis", "x", "--json"});
+  expect_near_rel(g["kp"], 50, "kp");
+  expect_near_rel(g["ki"], 2000, "ki");
+  expect_near_rel(g["kd"], 0.2, "kd");
+  expect_near_rel(g["tf"], 300e-6, "tf");
+  EXPECT_DOUBLE_EQ(g["ts"], 200e-6);
+  EXPECT_EQ(g["out_limit"], 20000);
+
+  // config save, change, load: back to what was saved.
+  const std::string file = std::string(std::getenv("XDG_RUNTIME_DIR")) + "/gains.toml";
+  expect_ok({"--sim", "config", "save", file});
+  expect_ok({"--sim", "gains", "set", "--axis", "x", "--kp", "7", "--ki", "0"});
+  EXPECT_NEAR(double(run_json({"--sim", "gains", "show", "--axis", "x", "--json"})["kp"]), 7, 1e-5);
+  expect_ok({"--sim", "config", "load", file});
+  json back = run_json({"--sim", "gains", "show", "--axis", "x", "--json"});
+  EXPECT_EQ(back["words"], g["words"]);
+  EXPECT_EQ(back["out_limit"], 20000);
+}
+
+TEST(CliBoard, KillingTheCliMidMoveTripsTheWatchdog) {
+  PrivateRuntimeDir rt;
+  Server sv;
+  ASSERT_EQ(sv.pty().rfind("/dev/", 0), 0u) << sv.pty();
+  const std::vector<std::string> port = {"--port", sv.pty()};
+  auto with = [&](std::vector<std::string> a) {
+    a.insert(a.begin(), port.begin(), port.end());
+    return a;
+  };
+  expect_ok(with({"gains", "set", "--axis", "x", "--defaults"}));
+  expect_ok(with({"enable", "--axis", "x"}));
+  // 20 mm at 1200 mm/min: a second of board time, many seconds of wall time.
+  const pid_t jog = spawn(with({"jog", "--axis", "x", "--distance", "20", "--feed", "1200"}), -1);
+  ASSERT_GT(jog, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  ::kill(jog, SIGKILL);
+  ::waitpid(jog, nullptr, 0);
+  // The board must live 100 ms of its own time without a frame; status
+  // itself feeds the watchdog, so wait quietly, longer each time.
+  json s;
+  for (int wait_ms : {1500, 4000, 8000}) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
+    s = run_json(with({"status", "--json"}));
+    if (!s["faults"].empty()) break;
+  }
+  EXPECT_EQ(s["faults"], json::array({"watchdog"}));
+  EXPECT_FALSE(s["armed"]);
+  EXPECT_FALSE(s["axes"][0]["drive"]) << "the drive must be off";
+  EXPECT_TRUE(s["axes"][0]["enabled"]);
+  const double mm = s["axes"][0]["position_mm"];
+  EXPECT_GT(mm, 0.1) << "the jog had started";
+  EXPECT_LT(mm, 19.5) << "the jog was cut short";
+  EXPECT_TRUE(sv.stop()) << "sim serve exits cleanly on SIGTERM";
+}
+
+TEST(CliBoard, ErrorsAreOneLine) {
+  PrivateRuntimeDir rt;
+  expect_one_error_line({"status"}, "--port DEV");
+  expect_one_error_line({"--port", "/dev/ttyUSB_motionctl_absent", "status"},
+                        "no such port /dev/ttyUSB_motionctl_absent");
+  expect_one_error_line({"--port", "/dev/null", "--sim", "status"}, "one of them");
+  expect_one_error_line({"--port", "/dev/null", "gains", "set", "--axis", "w"}, "--axis");
+  expect_one_error_line({"--port", "/dev/null", "jog", "--axis", "x"}, "--distance");
+  // A PTY nobody serves: the board does not answer.
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  ASSERT_GE(master, 0);
+  ASSERT_EQ(::grantpt(master), 0);
+  ASSERT_EQ(::unlockpt(master), 0);
+  const std::string slave = ::ptsname(master);
+  const auto t0 = std::chrono::steady_clock::now();
+  expect_one_error_line({"--port", slave, "status"}, "board at " + slave + " does not answer after");
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(10));
+  ::close(master);
+}
+
+}  // namespace
+}  // namespace mc::test
