@@ -109,17 +109,20 @@ class QuadDecoder {
     const bool straddle = (drop & (sync_other ^ r_.oth)) != 0;
 
     // 4x decode.
+    // The decision is registered once before the counters (RTL: the
+    // filter's compare and the count would otherwise be one path).
     const bool a_mv = pass & 1, b_mv = (pass >> 1) & 1;
-    const bool step = a_mv != b_mv;
-    const bool illegal = a_mv && b_mv;
-    const bool fwd = a_mv ? (((r_.sync ^ (r_.filt >> 1)) & 1) != 0) : (((r_.sync >> 1) ^ r_.filt) & 1) == 0;
-    const bool up = fwd != in.dir_inv;
-    const bool qerr = illegal || straddle;
+    n.step = !in.rst && a_mv != b_mv;
+    n.fwd = !in.rst && fwd_now(a_mv);
+    n.qerr = !in.rst && ((a_mv && b_mv) || straddle);
+    n.z_rise = !in.rst && ((pass >> 2) & 1) && ((r_.sync >> 2) & 1);
+    const bool step = r_.step;
+    const bool up = r_.fwd != in.dir_inv;
+    const bool qerr = r_.qerr;
 
     const bool dn = step && !up;
     const uint32_t pos_cnt = r_.pos_o + (dn ? ~0u : uint32_t(step));
-    const bool z_rise = ((pass >> 2) & 1) && ((r_.sync >> 2) & 1);
-    const bool idx_hit = r_.idx_armed_o && z_rise;
+    const bool idx_hit = r_.idx_armed_o && r_.z_rise;
 
     // Reset, then load, then the index clear, then counting.
     n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
@@ -188,9 +191,10 @@ class QuadDecoder {
     const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
     return !in.rst && !in.pos_load && !in.idx_arm && !in.idx_disarm && !in.err_clr && !in.sample &&
            pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 && r_.cnt[1] == 0 &&
-           r_.cnt[2] == 0 && r_.oth == sync_other;
+           r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise;
   }
   void skip(uint32_t n) {
+    r_.fwd = fwd_now(false);  // what every quiet clock registers
     const uint64_t age = uint64_t(r_.age) + n;
     r_.age = age > ones(AGE_W) ? ones(AGE_W) : uint32_t(age);
   }
@@ -213,11 +217,17 @@ class QuadDecoder {
 
  private:
   // The RTL's registers, same names, in the RTL's order.
+  // Direction of this clock's A or B move (A leads B: forward).
+  bool fwd_now(bool a_mv) const {
+    return a_mv ? ((r_.sync ^ (r_.filt >> 1)) & 1) != 0 : (((r_.sync >> 1) ^ r_.filt) & 1) == 0;
+  }
+
   struct Regs {
-    uint32_t meta = 0, sync = 0;  // 3 bits each
-    uint32_t cnt[3] = {};         // FILT_W bits each
-    uint32_t filt = 0;            // 3 bits
-    uint32_t oth = 0;             // 2 bits
+    bool step = false, fwd = false, qerr = false, z_rise = false;  // the registered decision
+    uint32_t meta = 0, sync = 0;                                   // 3 bits each
+    uint32_t cnt[3] = {};                                          // FILT_W bits each
+    uint32_t filt = 0;                                             // 3 bits
+    uint32_t oth = 0;                                              // 2 bits
     uint32_t pos_o = 0;
     uint32_t idx_pos_o = 0;
     bool idx_armed_o = false;

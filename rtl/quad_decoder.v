@@ -147,21 +147,33 @@ module quad_decoder #(
   wire straddle = |(drop[1:0] & (sync_other ^ oth));
 
   // ---------------------------------------------------------------------
-  // 4x decode from the filter's pass events, so no further register stage.
+  // 4x decode from the filter's pass events, registered once before the
+  // counters: the filter's compare and the 32-bit count would otherwise be
+  // one path, the board's longest.
   // Forward (A leads B) runs AB = 00, 10, 11, 01: an A edge goes forward
   // when A's new level differs from B, a B edge when B's new level equals A.
   wire a_mv = pass[0];
   wire b_mv = pass[1];
-  wire step = a_mv ^ b_mv;
-  wire illegal = a_mv & b_mv;
   wire fwd = a_mv ? (sync[0] ^ filt[1]) : ~(sync[1] ^ filt[0]);
-  wire up = fwd ^ dir_inv_i;
-  wire qerr = illegal | straddle;
+  reg  step, fwd_r, qerr, z_rise;
+  always @(posedge clk) begin
+    if (rst) begin
+      step   <= 1'b0;
+      fwd_r  <= 1'b0;
+      qerr   <= 1'b0;
+      z_rise <= 1'b0;
+    end else begin
+      step   <= a_mv ^ b_mv;
+      fwd_r  <= fwd;
+      qerr   <= (a_mv & b_mv) | straddle;
+      z_rise <= pass[2] & sync[2];
+    end
+  end
+  wire up = fwd_r ^ dir_inv_i;
 
   // One adder for both directions: +1, -1 (all ones) or 0.
   wire        dn = step & ~up;
   wire [31:0] pos_cnt = pos_o + {{31{dn}}, step};
-  wire        z_rise = pass[2] & sync[2];
   wire        idx_hit = idx_armed_o & z_rise;
 
   // Load beats the index clear, which beats counting: software's explicit

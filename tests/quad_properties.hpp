@@ -30,12 +30,15 @@ class QuadProperties : public ::testing::Test {
   int pick(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
 
   // The clock (a QuadBench::now value) at whose edge a pin change at time t
-  // reaches pos_o and the filtered levels: the edge at ceil(t) samples it,
+  // reaches the filtered levels: the edge at ceil(t) samples it,
   // max(filt_len, 1) + 1 edges later it is out (rtl/quad_decoder.v). t must
   // be clear of the metastable window.
-  static uint64_t clock_of(const Bench& b, double t) {
+  static uint64_t level_clock_of(const Bench& b, double t) {
     return uint64_t(std::ceil(t)) + uint64_t(std::max<int>(int(b.in.filt_len), 1)) + 1;
   }
+  // ... and the counters (pos_o, the index latch, the error flag): one edge
+  // later, the filter's decision being registered before them.
+  static uint64_t clock_of(const Bench& b, double t) { return level_clock_of(b, t) + 1; }
   static void run_to(Bench& b, uint64_t k) {
     while (b.now < k) b.clock();
   }
@@ -79,7 +82,7 @@ TYPED_TEST_P(QuadProperties, ResetAdoptsThePinLevels) {
   EXPECT_EQ(b.sim.mismatches(), 0);
 }
 
-TYPED_TEST_P(QuadProperties, LatencyIsFilterLengthPlusOne) {
+TYPED_TEST_P(QuadProperties, LatencyLevelsThenCount) {
   typename TestFixture::Bench b(2);
   for (uint32_t len : {0u, 1u, 2u, 5u, 16u}) {
     b.in.filt_len = len;
@@ -88,11 +91,15 @@ TYPED_TEST_P(QuadProperties, LatencyIsFilterLengthPlusOne) {
     const double t = b.next_time(0.5);
     b.wave.edge(t, +1);
     b.wave.toggle(2, t);
-    const uint64_t expect = TestFixture::clock_of(b, t);
-    while (b.out.pos == before && b.now < expect + 40) b.clock();
-    EXPECT_EQ(b.now - 1, expect) << "filt_len " << len;  // b.now - 1: the clock just run
-    EXPECT_EQ(b.out.a, b.wave.level(0));
-    EXPECT_EQ(b.out.z, b.wave.level(2));
+    const uint64_t levels = TestFixture::level_clock_of(b, t);
+    while (b.out.z != b.wave.level(2) && b.now < levels + 40) b.clock();
+    EXPECT_EQ(b.now - 1, levels) << "filt_len " << len;  // b.now - 1: the clock just run
+    EXPECT_EQ(b.out.a, b.wave.level(0)) << "filt_len " << len;
+    EXPECT_EQ(b.out.b, b.wave.level(1)) << "filt_len " << len;
+    EXPECT_EQ(b.out.pos, before) << "filt_len " << len;  // the count follows a clock later
+    b.clock();
+    EXPECT_EQ(b.now - 1, TestFixture::clock_of(b, t));
+    EXPECT_EQ(b.out.pos, int32_t(uint32_t(before) + 1)) << "filt_len " << len;
   }
   EXPECT_EQ(b.sim.mismatches(), 0);
 }
@@ -436,7 +443,7 @@ TYPED_TEST_P(QuadProperties, VelocityIsTheCountDifferencePerSample) {
   EXPECT_EQ(b.sim.mismatches(), 0);
 }
 
-REGISTER_TYPED_TEST_SUITE_P(QuadProperties, ResetAdoptsThePinLevels, LatencyIsFilterLengthPlusOne,
+REGISTER_TYPED_TEST_SUITE_P(QuadProperties, ResetAdoptsThePinLevels, LatencyLevelsThenCount,
                             NoiseShorterThanTheFilterCountsNothing, ReversalsAtEveryPhaseCountExactly,
                             ExactUpToTheRateLimitFlaggedPastIt, IndexLatchAndClear, LoadStrobeAndWrap,
                             ErrorFlagClearAndSaturation, VelocityIsTheCountDifferencePerSample);
