@@ -21,7 +21,7 @@ std::string hex(uint32_t v, int digits) {
 }
 
 uint16_t frame_addr(const proto::Frame& f) {
-  return f.payload.size() >= 2 ? uint16_t(f.payload[0] | f.payload[1] << 8) : 0;
+  return f.payload.size() >= 2 ? uint16_t(f.payload[0] | f.payload[1] << 8) : uint16_t(0);
 }
 
 }  // namespace
