@@ -435,9 +435,14 @@ void tune(const TuneOptions& o) {
   AxisModel m{};
   RelayResult r{};
   if (o.method == "model") {
-    m = identify(e.u, e.y, e.ts);
-    m.ts = ts;  // the board runs the design at its own period
+    // One lag: the capture period (link-bound, >= 0.48 ms at 1 Mbaud) cannot resolve a motor's
+    // L/R, and a second lag then only lets the fit wander (docs/tuning.md).
+    m = identify(e.u, e.y, e.ts, true, false);
+    // The default bandwidth's cap 2 pi / (40 Ts) taken at the capture's
+    // period: the model is trusted no faster than its samples show it, and
+    // the electrical lag the one-lag fit leaves out stays well beyond wc.
     if (wc == 0) wc = default_bandwidth(m);
+    m.ts = ts;  // the board runs the design at its own period
     g = design_model(m, wc, zeta);
     j["model"] = {{"k_counts_per_s_per_du", m.k}, {"tau_s", m.tau},
                   {"tau_fast_s", m.tau_fast},     {"coulomb_du", m.coulomb},
