@@ -482,10 +482,10 @@ void tune(const TuneOptions& o) {
   if (o.method == "model") {
     std::snprintf(line, sizeof line,
                   "identified axis %s (open loop, PRBS +-%.0f drive units, %zu samples at %s):\n"
-                  "  K = %.4f counts/s per drive unit, tau = %.3f ms (fast lag %.3f ms), Coulomb %.1f drive "
-                  "units, fit %.3f counts RMS\n",
+                  "  P(s) = K / (s (tau s + 1)): K = %.4f counts/s per drive unit, tau = %.3f ms; Coulomb "
+                  "friction %.1f drive units; fit %.3f counts RMS\n",
                   axis_name(a), TuneDefaults::prbs_amplitude, e.u.size(), format_duration(e.ts).c_str(), m.k,
-                  m.tau * 1e3, m.tau_fast * 1e3, m.coulomb, m.fit_rms);
+                  m.tau * 1e3, m.coulomb, m.fit_rms);
     std::cout << line;
     std::snprintf(line, sizeof line, "design: pole placement, bandwidth %.1f rad/s, damping %.2g, at Ts %s\n",
                   wc, zeta, format_duration(ts).c_str());
