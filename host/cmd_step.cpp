@@ -579,6 +579,7 @@ LoopRun run_jog(BoardLink& l, int a, int32_t counts, double feed_counts_s, uint3
   }
   v.erase(v.begin(), v.end() - 1);
   std::vector<seg::Words> batch;
+  batch.reserve(segs.size());
   for (const PlannedSegment& p : segs) batch.push_back(seg::pack(p.seg));
   if (!l.segments(batch)) throw BoardError("the interpolator queue is full");
   const int64_t n0 = v.front().n;
