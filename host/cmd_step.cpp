@@ -143,11 +143,9 @@ StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration) {
   return c;
 }
 
-void write_step_csv(const std::string& file, const StepCapture& c, double cpm) {
+void write_step_csv(const std::string& file, const StepCapture& c) {
   std::ofstream f(file);
   if (!f) throw InputError("--csv", quote(file), "a writable path");
-  f << "# motionctl step: " << c.counts << " counts at Ts " << c.ts << " s, every " << c.decim
-    << " samples; 1 mm = " << cpm * 1e-3 << " counts\n";
   f << "t_s,cmd_counts,pos_counts,err_counts,out_drive_units\n";
   char b[160];
   for (size_t i = 0; i < c.s.size(); ++i) {
@@ -213,7 +211,7 @@ void step(const StepOptions& o) {
   BoardLink& l = *b.link;
   const int a = board_axis(l, o.axis);
   const StepCapture c = capture_step(l, a, counts, duration);
-  if (!o.csv.empty()) write_step_csv(o.csv, c, cpm);
+  if (!o.csv.empty()) write_step_csv(o.csv, c);
   if (!o.plot.empty()) write_step_plot(o.plot, c, cpm);
   if (o.json) {
     nlohmann::ordered_json j;
@@ -222,6 +220,7 @@ void step(const StepOptions& o) {
     j["step_mm"] = counts / cpm * 1e3;
     j["ts_s"] = c.ts;
     j["decimation"] = c.decim;
+    j["decimation_frames_alone"] = c.decim_needed;
     j["samples"] = c.s.size();
     j["gaps"] = c.gaps;
     j["missing_samples"] = c.missing;
@@ -235,7 +234,8 @@ void step(const StepOptions& o) {
     std::cout << "telemetry every " << c.decim << (c.decim == 1 ? " sample" : " samples") << " ("
               << format_duration(c.decim * c.ts) << "): a frame takes "
               << format_duration(10.0 * telemetry_frame_bytes(1) / double(l.read(br::BAUD)))
-              << " on the link, plus the replies queued in front of it; " << c.s.size() << " samples, ";
+              << " on the link (alone it fits every " << c.decim_needed
+              << " samples); two replies may queue in front of it; " << c.s.size() << " samples, ";
     if (c.gaps)
       std::cout << "GAPS: " << c.gaps << " jumps of the sample counter, " << c.missing
                 << " frames lost (the metrics use the samples received, nothing is interpolated)\n";
