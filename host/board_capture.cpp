@@ -1,5 +1,8 @@
 #include "board_capture.hpp"
 
+#include <signal.h>
+
+#include <atomic>
 #include <cmath>
 
 #include "errors.hpp"
@@ -9,6 +12,22 @@ namespace mc::host {
 
 namespace br = board::reg;
 namespace bb = board::bits;
+
+namespace {
+std::atomic<bool> g_interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
+extern "C" void on_interrupt(int) {
+  g_interrupted.store(true);
+}
+}  // namespace
+
+void catch_interrupts() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 
 uint32_t telemetry_decimation(double ts_s, double baud, int replies) {
   if (!(ts_s > 0) || !(baud > 0)) throw InputError("sample period / baud", "not above 0", "positive values");
@@ -37,6 +56,8 @@ size_t TelemetryStream::next(std::vector<TlmSample>& out) {
   const unsigned mask = 1u << axis_;
   size_t added = 0;
   while (added == 0) {
+    if (g_interrupted.load())
+      throw Interrupted("interrupted; the command's temporary settings (telemetry, experiment gains, drive override) are undone");
     l_.poll(std::chrono::milliseconds(20));
     auto& q = l_.telemetry();
     while (!q.empty()) {

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "board_link.hpp"
@@ -22,6 +23,16 @@ constexpr int telemetry_frame_bytes(int axes) {
 // replies queued in front of it (10 bits a byte at `baud`) fit in N sample
 // periods, so no sample is skipped (docs/protocol.md, Telemetry).
 uint32_t telemetry_decimation(double ts_s, double baud, int replies);
+
+// SIGINT and SIGTERM while a command has the board in a temporary state:
+// catch_interrupts() installs handlers that only set a flag, and
+// TelemetryStream::next() then throws Interrupted, so that the command puts
+// the board back (gains, Ts, the DRV override, telemetry off) before it exits.
+class Interrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+void catch_interrupts();
 
 // One sample of one axis, as the telemetry frame carries it.
 struct TlmSample {

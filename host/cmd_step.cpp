@@ -210,6 +210,7 @@ void step(const StepOptions& o) {
   Board b = open_board();
   BoardLink& l = *b.link;
   const int a = board_axis(l, o.axis);
+  catch_interrupts();
   const StepCapture c = capture_step(l, a, counts, duration);
   if (!o.csv.empty()) write_step_csv(o.csv, c);
   if (!o.plot.empty()) write_step_plot(o.plot, c, cpm);
@@ -414,6 +415,7 @@ void tune(const TuneOptions& o) {
   const double ts = cur.gains.ts;
   const double baud = double(l.read(br::BAUD));
   const Snapshot snap = snapshot(l, a);
+  catch_interrupts();
   Experiment e;
   try {
     e = o.method == "model" ? model_experiment(l, a, ts, baud) : relay_experiment(l, a, ts, baud);
@@ -659,6 +661,7 @@ void hostloop(const HostloopOptions& o) {
   const int32_t counts = int32_t(std::llround(mm * 1e-3 * cpm));
   if (counts == 0) throw InputError("--distance", quote(o.distance), "a move of at least one count");
   arm_axis(l, a);
+  catch_interrupts();
   const int64_t samples = std::llround(duration / ts);
   const double fc = feed / 60e3 * cpm;
   const LoopRun host = run_jog(l, a, counts, fc, decim, samples, every, &pid);

@@ -5,10 +5,12 @@
 // were, hostloop runs and reports, and bad arguments give one error line.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cli_run.hpp"
@@ -108,6 +110,27 @@ TEST(CliStep, TuneModelApplyBeatsTheDefaultGains) {
       double(tuned["proposed"]["predicted"]["settling_s"]) * 1e3);
   EXPECT_LE(double(after["overshoot_pct"]), 10.0);
   EXPECT_LT(double(after["settling_s"]), double(before["settling_s"]));
+}
+
+TEST(CliStep, InterruptedTuneRestoresTheGains) {
+  PrivateRuntimeDir rt;
+  Server sv;
+  board_json(sv, {"gains", "set", "--axis", "x", "--defaults"});
+  const json before = board_json(sv, {"gains", "show", "--axis", "x"});
+  const int devnull = ::open("/dev/null", O_WRONLY);
+  const pid_t tune = spawn({"--port", sv.pty(), "tune", "--axis", "x"}, devnull);
+  ::close(devnull);
+  ASSERT_GT(tune, 0);
+  // The experiment (1 s of board time) takes several seconds of wall time.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  ::kill(tune, SIGINT);
+  int st = 0;
+  ::waitpid(tune, &st, 0);
+  ASSERT_TRUE(WIFEXITED(st)) << "SIGINT is caught, not fatal";
+  EXPECT_NE(WEXITSTATUS(st), 0);
+  const json after = board_json(sv, {"gains", "show", "--axis", "x"});
+  EXPECT_EQ(after["words"], before["words"]);
+  EXPECT_EQ(after["ts"], before["ts"]) << "the experiment's sample period is undone";
 }
 
 TEST(CliStep, HostloopRunsAndReports) {
