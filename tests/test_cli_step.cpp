@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -43,8 +45,31 @@ TEST(CliStep, CaptureAgreesWithTheTwinCosimulation) {
   PrivateRuntimeDir rt;
   Server sv;
   board_json(sv, {"gains", "set", "--axis", "x", "--defaults"});
-  const json b = step_json(sv);
+  const std::string dir = std::getenv("XDG_RUNTIME_DIR");
+  const json b = board_json(sv, {"step", "--axis", "x", "--size", "1", "--duration", "0.2s", "--csv",
+                                 dir + "/step.csv", "--plot", dir + "/step.png"});
   ASSERT_TRUE(b.contains("metrics"));
+  // The CSV: the header with units, one row per sample, time increasing,
+  // the command stepping by 400 counts at t = 0.
+  std::ifstream csv(dir + "/step.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "t_s,cmd_counts,pos_counts,err_counts,out_drive_units");
+  size_t rows = 0;
+  double t_prev = -1;
+  for (; std::getline(csv, line); ++rows) {
+    double t = 0;
+    int cmd = 0, pos = 0, err = 0, out = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%d,%d,%d,%d", &t, &cmd, &pos, &err, &out), 5) << line;
+    EXPECT_GT(t, t_prev);
+    t_prev = t;
+    EXPECT_EQ(cmd, t < 0 ? 0 : 400) << line;
+  }
+  EXPECT_EQ(rows, size_t(b["samples"]));
+  std::ifstream png(dir + "/step.png", std::ios::binary);
+  char sig[4] = {};
+  png.read(sig, 4);
+  EXPECT_EQ(std::string(sig + 1, 3), "PNG") << "gnuplot wrote the plot";
   EXPECT_EQ(b["step_counts"], 400);
   EXPECT_EQ(b["gaps"], 0) << "the decimation the step chose must carry every frame";
   EXPECT_EQ(b["faults"], "none");
