@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
@@ -204,6 +205,25 @@ int parse_axis(const std::string& name, const char* option) {
 const char* axis_name(int axis) {
   static const char* const names[] = {"x", "y", "z"};
   return names[axis];
+}
+
+std::array<double, 3> axis_scales() {
+  std::array<double, 3> s{};
+  const mc::sim::MachineConfig m = machine();
+  for (size_t a = 0; a < m.axes.size() && a < 3; ++a) s[a] = mc::sim::counts_per_m(m.axes[a]);
+  return s;
+}
+
+void note(const std::string& s) {
+  std::cerr << "motionctl: note: " << s << '\n';
+}
+
+int board_axis(BoardLink& l, const std::string& name) {
+  const int a = parse_axis(name);
+  const int naxes = int(l.read(board::reg::INFO) & 0xF);
+  if (a >= naxes)
+    throw InputError("--axis", quote(name), "one of the board's " + std::to_string(naxes) + " axes");
+  return a;
 }
 
 }  // namespace mc::host::cli

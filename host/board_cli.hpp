@@ -12,6 +12,7 @@
 // minutes without host traffic.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -66,8 +67,15 @@ void unregister_sim_server(const SimServer& s);
 // The running server, or a freshly started one for `config`.
 SimServer ensure_sim_server(const std::string& config);
 
+// Counts per metre of each board axis the machine config describes (0: none).
+std::array<double, 3> axis_scales();
+// "motionctl: note: ..." on stderr.
+void note(const std::string& s);
+
 // "x", "Y" -> 0, 1; throws InputError naming the option.
 int parse_axis(const std::string& name, const char* option = "--axis");
 const char* axis_name(int axis);
+// parse_axis, and an axis the board has (it reports how many).
+int board_axis(BoardLink& l, const std::string& name);
 
 }  // namespace mc::host::cli

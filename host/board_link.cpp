@@ -96,6 +96,38 @@ void BoardLink::note_rtt(double ms) {
   c_.srtt_ms = 0.875 * c_.srtt_ms + 0.125 * ms;
 }
 
+bool BoardLink::take(const uint8_t* p, size_t n, const proto::Frame* req, proto::Reply& out) {
+  bytes_in_ += n;
+  bool answered = false;
+  for (size_t i = 0; i < n; ++i) {
+    proto::Frame f;
+    if (!dec_.push(p[i], f)) continue;
+    if (proto::is_telemetry(f)) {
+      ++c_.telemetry;
+      tlm_.push_back(std::move(f));
+      if (tlm_.size() > o_.max_telemetry) {
+        tlm_.pop_front();
+        ++c_.telemetry_dropped;
+      }
+      continue;
+    }
+    if (!proto::is_reply(f)) continue;
+    proto::Reply r;
+    try {
+      r = proto::parse_reply(f);
+    } catch (const std::exception&) {
+      continue;  // a malformed reply counts as no reply: the retry recovers
+    }
+    if (!answered && req && proto::answers(r, *req)) {
+      out = r;
+      answered = true;
+    } else {
+      ++c_.stale;
+    }
+  }
+  return answered;
+}
+
 bool BoardLink::await(const proto::Frame& req, Clock::time_point deadline, proto::Reply& out) {
   uint8_t buf[256];
   for (;;) {
@@ -104,36 +136,16 @@ bool BoardLink::await(const proto::Frame& req, Clock::time_point deadline, proto
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(1);
     const size_t n = s_.read(buf, sizeof buf, left);
-    bytes_in_ += n;
-    bool answered = false;
-    for (size_t i = 0; i < n; ++i) {
-      proto::Frame f;
-      if (!dec_.push(buf[i], f)) continue;
-      if (proto::is_telemetry(f)) {
-        ++c_.telemetry;
-        tlm_.push_back(std::move(f));
-        if (tlm_.size() > o_.max_telemetry) {
-          tlm_.pop_front();
-          ++c_.telemetry_dropped;
-        }
-        continue;
-      }
-      if (!proto::is_reply(f)) continue;
-      proto::Reply r;
-      try {
-        r = proto::parse_reply(f);
-      } catch (const std::exception&) {
-        continue;  // a malformed reply counts as no reply: the retry recovers
-      }
-      if (!answered && proto::answers(r, req)) {
-        out = r;
-        answered = true;
-      } else {
-        ++c_.stale;
-      }
-    }
-    if (answered) return true;
+    if (take(buf, n, &req, out)) return true;
   }
+}
+
+size_t BoardLink::poll(std::chrono::milliseconds wait) {
+  uint8_t buf[256];
+  proto::Reply unused;
+  const size_t n = s_.read(buf, sizeof buf, wait);
+  take(buf, n, nullptr, unused);
+  return n;
 }
 
 proto::Reply BoardLink::transact(proto::Frame req) {

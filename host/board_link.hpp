@@ -70,6 +70,11 @@ class BoardLink {
   // nothing queued; try again later), true when queued.
   bool segments(const std::vector<seg::Words>& segs);
 
+  // Reads what arrives within `wait` without sending anything, queuing
+  // telemetry (a reply that arrives now answers nothing and counts as
+  // stale). Returns the number of bytes read.
+  size_t poll(std::chrono::milliseconds wait);
+
   // Telemetry frames received so far (in order), for captures.
   std::deque<proto::Frame>& telemetry() { return tlm_; }
   const LinkCounters& counters() const;
@@ -80,6 +85,9 @@ class BoardLink {
   void note_rtt(double ms);
   // Reads until a reply answering `req` arrives or the deadline passes.
   bool await(const proto::Frame& req, std::chrono::steady_clock::time_point deadline, proto::Reply& out);
+  // Decodes bytes: telemetry into tlm_; returns true and fills `out` when a
+  // reply answers `req` (nullptr: none is pending).
+  bool take(const uint8_t* p, size_t n, const proto::Frame* req, proto::Reply& out);
 
   ByteStream& s_;
   LinkOptions o_;

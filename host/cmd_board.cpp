@@ -22,18 +22,6 @@ namespace {
 namespace br = board::reg;
 namespace bb = board::bits;
 
-// Counts per metre of each board axis the machine config describes (0: none).
-std::array<double, 3> scales() {
-  std::array<double, 3> s{};
-  const mc::sim::MachineConfig m = machine();
-  for (size_t a = 0; a < m.axes.size() && a < 3; ++a) s[a] = mc::sim::counts_per_m(m.axes[a]);
-  return s;
-}
-
-void note(const std::string& s) {
-  std::cerr << "motionctl: note: " << s << '\n';
-}
-
 std::string watchdog_text(const BoardState& s) {
   char b[200];
   std::snprintf(b, sizeof b, "%s (WDOG = %u cycles)", format_duration(double(s.wdog) / s.clk_hz).c_str(),
@@ -45,7 +33,7 @@ std::string watchdog_text(const BoardState& s) {
 void status(bool json) {
   Board b = open_board();
   const BoardState s = read_state(*b.link);
-  const auto scale = scales();
+  const auto scale = axis_scales();
   const LinkCounters& c = b.link->counters();
   if (json) {
     nlohmann::ordered_json j;
@@ -129,7 +117,7 @@ std::vector<int> axes_of(const std::string& axis, int naxes) {
   }
   // Every axis the machine has: a board axis without a motor stays off.
   std::vector<int> v;
-  const auto sc = scales();
+  const auto sc = axis_scales();
   for (int a = 0; a < naxes; ++a)
     if (sc[size_t(a)] > 0) v.push_back(a);
   return v;
@@ -192,7 +180,7 @@ void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::arra
              const std::string& feed_text) {
   const double feed_mm_min = parse_number(feed_text, "--feed");
   if (!(feed_mm_min > 0)) throw InputError("--feed", quote(feed_text), "a feed above 0 mm/min");
-  const auto scale = scales();
+  const auto scale = axis_scales();
   const Vec3 from = arm(l, note);
   const Vec3 to = target(from, scale);
   // The feed along the path: the axes share one scale in a sane machine; the
@@ -229,7 +217,7 @@ void require_enabled(BoardLink& l, int a) {
 void jog(const MotionOptions& o) {
   const int a = parse_axis(o.axis);
   const double mm = parse_number(o.distance, "--distance");
-  if (scales()[size_t(a)] == 0)
+  if (axis_scales()[size_t(a)] == 0)
     throw InputError("--axis", quote(o.axis), "an axis of the machine config (" + machine().source + ")");
   Board b = open_board();
   require_enabled(*b.link, a);
@@ -248,7 +236,7 @@ void move(const MotionOptions& o) {
   std::stringstream ss(o.target);
   for (std::string part; std::getline(ss, part, ',');) mm.push_back(parse_number(part, "target"));
   if (mm.size() < 2 || mm.size() > 3) throw InputError("target", quote(o.target), "X,Y or X,Y,Z in mm");
-  const auto sc = scales();
+  const auto sc = axis_scales();
   for (size_t a = 0; a < mm.size(); ++a)
     if (sc[a] == 0)
       throw InputError("target", quote(o.target),

@@ -58,14 +58,6 @@ void print_gains(int axis, const AxisGains& g, std::ostream& os) {
   os << b;
 }
 
-int board_axis(BoardLink& l, const std::string& name) {
-  const int a = parse_axis(name);
-  const int naxes = int(l.read(br::INFO) & 0xF);
-  if (a >= naxes)
-    throw InputError("--axis", quote(name), "one of the board's " + std::to_string(naxes) + " axes");
-  return a;
-}
-
 void show(const GainsOptions& o) {
   parse_axis(o.axis);  // a bad name is an error before any port is opened
   Board b = open_board();

@@ -19,5 +19,6 @@ void add_cosim_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
 void add_board_commands(CLI::App& app);
 void add_gains_commands(CLI::App& app);
+void add_step_commands(CLI::App& app);
 
 }  // namespace mc::host::cli

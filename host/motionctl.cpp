@@ -67,6 +67,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_sim_command(app);
   mc::host::cli::add_board_commands(app);
   mc::host::cli::add_gains_commands(app);
+  mc::host::cli::add_step_commands(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");

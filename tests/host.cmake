@@ -23,3 +23,6 @@ target_link_libraries(test_step_metrics PRIVATE mc_host)
 
 mc_gtest(test_tuning unit test_tuning.cpp)
 target_link_libraries(test_tuning PRIVATE mc_host mc_sim)
+
+mc_gtest(test_board_capture unit test_board_capture.cpp)
+target_link_libraries(test_board_capture PRIVATE mc_host)

@@ -20,83 +20,12 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "vboard_server.hpp"
 
 namespace mc::test {
 namespace {
 
 using nlohmann::json;
-
-// A private runtime directory, so that --sim finds only this test's server.
-class PrivateRuntimeDir {
- public:
-  PrivateRuntimeDir() {
-    char tmpl[] = "/tmp/motionctl-test-XXXXXX";
-    dir_ = ::mkdtemp(tmpl);
-    ::setenv("XDG_RUNTIME_DIR", dir_.c_str(), 1);
-  }
-  ~PrivateRuntimeDir() {
-    try {
-      run({"sim", "stop"});
-      std::system(("rm -rf '" + dir_ + "'").c_str());
-    } catch (...) {  // a destructor must not throw; the directory stays behind
-    }
-  }
-
- private:
-  std::string dir_;
-};
-
-pid_t spawn(const std::vector<std::string>& args, int out_fd) {
-  std::vector<std::string> storage{MOTIONCTL_PATH};
-  storage.insert(storage.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  argv.reserve(storage.size() + 1);
-  for (auto& s : storage) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  if (out_fd >= 0) posix_spawn_file_actions_adddup2(&fa, out_fd, 1);
-  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("posix_spawn failed");
-  return pid;
-}
-
-// `motionctl sim serve --fast` in its own process; the PTY path from its first line.
-class Server {
- public:
-  Server() {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
-    pid_ = spawn({"sim", "serve", "--fast", "--no-register"}, fds[1]);
-    if (pid_ <= 0) throw std::runtime_error("no server");
-    ::close(fds[1]);
-    char c;
-    while (::read(fds[0], &c, 1) == 1 && c != '\n') pty_ += c;
-    ::close(fds[0]);
-  }
-  ~Server() {
-    if (pid_ <= 0) return;  // kill(-1) would signal every process we own
-    ::kill(pid_, SIGTERM);
-    ::waitpid(pid_, nullptr, 0);
-  }
-  const std::string& pty() const { return pty_; }
-  // Stops it; true when it exited cleanly.
-  bool stop() {
-    if (pid_ <= 0) return false;
-    ::kill(pid_, SIGTERM);
-    int st = 0;
-    ::waitpid(pid_, &st, 0);
-    pid_ = -1;
-    return WIFEXITED(st) && WEXITSTATUS(st) == 0;
-  }
-
- private:
-  pid_t pid_ = -1;
-  std::string pty_;
-};
 
 json run_json(const std::vector<std::string>& args) {
   const Result r = run(args);

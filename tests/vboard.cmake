@@ -9,3 +9,8 @@ mc_gtest(test_cli_board system test_cli_board.cpp)
 target_link_libraries(test_cli_board PRIVATE nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_board PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_cli_board motionctl)
+
+mc_gtest(test_cli_step system test_cli_step.cpp)
+target_link_libraries(test_cli_step PRIVATE mc_host mc_sim nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_step PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_cli_step motionctl)
