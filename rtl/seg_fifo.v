@@ -30,6 +30,10 @@ module seg_fifo #(
   localparam [AW:0] FULL = DEPTH;
   /* verilator lint_on WIDTH */
 
+  // A read and a write never meet at one address (equal pointers mean empty,
+  // when nothing is read, or full, when nothing is written), so Yosys needs
+  // no collision logic around the block RAM.
+  (* no_rw_check *)
   reg [31:0] mem[0:DEPTH-1];
   reg [AW-1:0] wp, rp;
   wire do_wr = wr_i && count_o != FULL && !flush_i;
