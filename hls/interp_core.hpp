@@ -88,10 +88,12 @@ class InterpCore {
   static constexpr int TICK = 1 << seg::TICK_LOG2;  // clocks per iteration, at most one
   static constexpr int PREP_STEPS = 8;
   static constexpr int INIT_STEPS = 5;  // after reset: equalize, read, clear three words
-  // Longest pause between two steps across a junction: the end test waits
-  // for the next tick's step 5, then IDLE, LOAD, PREP, and a tick up to the
-  // step that moves.
-  static constexpr int JUNCTION = TICK + 1 + (seg::SEG_WORDS + 1) + PREP_STEPS + 14;
+  // Longest pause between two steps across a junction, with an iteration
+  // due: from the step that moves (tick step 13) to the end test at the next
+  // tick's step 5, then IDLE, LOAD, PREP, and steps 0..13 of the first tick.
+  static constexpr int STEP_MOVE = 13, STEP_DECIDE = 5;
+  static constexpr int JUNCTION =
+      (TICK - STEP_MOVE + STEP_DECIDE) + 1 + (seg::SEG_WORDS + 1) + PREP_STEPS + STEP_MOVE + 1;
 
   void reset() {
     fifo_.reset();
