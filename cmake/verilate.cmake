@@ -2,7 +2,7 @@
 
 set(MC_RTL_DIR ${CMAKE_SOURCE_DIR}/rtl)
 set(MC_VERILATOR_ARGS -Wall --assert -x-assign unique -x-initial unique -O3)
-set(MC_INTERP_RTL interp_core.v seg_fifo.v feed_gen.v line_interp.v arc_interp.v)
+set(MC_INTERP_RTL interp_core.v seg_fifo.v)
 list(TRANSFORM MC_INTERP_RTL PREPEND ${MC_RTL_DIR}/)
 set(MC_MOTION_RTL motion_core.v pid_core.v mul_align.v quad_decoder.v)
 list(TRANSFORM MC_MOTION_RTL PREPEND ${MC_RTL_DIR}/)

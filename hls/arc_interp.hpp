@@ -1,4 +1,6 @@
-// arc_interp twin: the stairs-approximation circle. Mirrors rtl/arc_interp.v.
+// arc_interp: the stairs-approximation circle, one iteration at a time: the
+// reference for the path of rtl/interp_core.v's serial engine, used by the
+// host planner's walk() and by the tests that compare the core step for step.
 //
 // Coordinates (x, y) are relative to the centre. D = x^2 + y^2 - R^2 is kept
 // exact by adding 2*m*c + 1 when coordinate c moves by m = +-1: no multiplier
@@ -25,11 +27,6 @@
 // (it must be within one step of the circle and ahead of the walk; the host
 // planner checks both). N, also from the host, bounds the walk whatever it is
 // given.
-//
-// Timing (as the RTL): the quadrant and then the decision are registered, so
-// they belong to the current state only two clocks after a load word or an
-// iteration; ready() says so, and the sequencer neither steps nor ends an arc
-// until it is.
 //
 // Quadrants, with the axis points assigned so that the walk leaves a quadrant
 // exactly when an inward move makes a coordinate zero:
@@ -74,7 +71,6 @@ struct ArcStep {
 class ArcInterp {
  public:
   void load(int idx, uint32_t w) {
-    quiet_ = 0;
     if (idx == seg::W_HDR) {
       ccw_ = (w >> seg::H_CCW) & 1;
       nq_ = (w >> seg::H_NQ_LSB) & 7;
@@ -86,10 +82,6 @@ class ArcInterp {
     if (idx == seg::W_D) ye_ = int32_t(sext(w, seg::ARC_W));
     if (idx == seg::W_E) d_ = int32_t(sext(w, seg::D_W));
   }
-
-  // A clock with neither a load word nor an iteration.
-  void settle() { quiet_ = quiet_ < 2 ? quiet_ + 1 : 2; }
-  bool ready() const { return quiet_ == 2; }
 
   bool final_quadrant() const { return cross_ == nq_; }
   // The end point is reached: the segment is over.
@@ -113,7 +105,6 @@ class ArcInterp {
 
   // Commit one iteration: st is step() of the current state.
   void iterate(const ArcStep& st) {
-    quiet_ = 0;
     int32_t& c = st.movex ? x_ : y_;
     // (c + m)^2 - c^2 = 2*m*c + 1
     d_ = int32_t(sext(uint64_t(int64_t(d_) + int64_t(2 * st.dir) * c + 1), seg::D_W));
@@ -133,7 +124,6 @@ class ArcInterp {
   int cross_ = 0;
   int nq_ = 0;
   bool ccw_ = false;
-  int quiet_ = 0;  // clocks since the state last changed, up to 2
 };
 
 }  // namespace mc

@@ -6,27 +6,63 @@
 //   words when its first word arrives, the whole segment is dropped and
 //   ovf() set, so the queue can never fall out of step. The host checks
 //   count() before writing.
-// - The core loads the oldest segment (SEG_WORDS + 1 clocks) and runs it: the
-//   feed generator fires iterations, each moving the position command pos()
-//   by at most one count per axis. The next segment follows at once, with
-//   the phase of the feed generator carried over, so a queue of segments
-//   runs without a stop (a pause of about SEG_WORDS clocks at each junction,
-//   ~1 us at 12 MHz, and iterations that fall due meanwhile are kept, up to
-//   three).
+// - The core loads the oldest segment (SEG_WORDS + 1 clocks), prepares it
+//   (PREP_STEPS clocks) and runs it: the feed generator fires iterations,
+//   each moving the position command pos() by at most one count per axis. The
+//   next segment follows at once, with the phase of the feed generator carried
+//   over, so a queue of segments runs without a stop (a pause of at most
+//   JUNCTION clocks between two steps, iterations that fall due meanwhile are
+//   kept, up to three).
 // - When a segment ends, the queue holds no whole segment and that segment
 //   was not marked last, underrun() is set: the position holds (it never
 //   jumps) and motion resumes when segments arrive.
 // - hold pauses the feed (feed hold); abort stops at once and empties the
 //   queue; set loads the position, taken only while idle; clr clears the
 //   sticky flags.
+//
+// Structure: a serial engine. One 32-bit ALU, out = A + (B ^ inv) + cin, with
+// A from read port a and B from read port b or the FIFO word, runs a fixed
+// schedule over a 16-word state RAM (block RAM with two read ports and one
+// write port; reads are registered, so each step's addresses are issued the
+// step before, and no step reads a word in the clock it is written). A tick
+// of TICK = 2^TICK_LOG2 clocks advances the feed phase once and runs at most
+// one iteration, so the iteration rate is at most f_clk / TICK. The phase
+// keeps the meaning of the segment's rate word (iterations per clock *
+// 2^PH_W): adding inc once per tick into an accumulator of PH_W - TICK_LOG2
+// bits carries exactly when the PH_W-bit accumulator, advanced by inc every
+// clock, would have carried during that tick.
+//
+// RAM words (V[i] = word i of the segment as loaded, except as noted):
+//   0 zero (cleared after reset)      1 N, counted down: iterations left
+//   2 inc[31:0] (arcs: +-k per step)  3 {k[47:32], inc[47:32]}
+//   4..6 line: 2|d| (doubled in PREP); arc: x, y, xe
+//   7..9 line: g per axis; arc: ye, D, k[31:0]
+//   11, 12 feed phase [31:0], [PH_W-TICK_LOG2-1:32]
+//   13 k[47:32]  14 2N  15 arc: D + mx*x
+// The line's error term is kept as g = 2N - E (hls/line_interp.hpp has E):
+// an axis steps when g - 2|d| <= 0, and g then gains 2N.
+//
+// Schedule. After reset (IDLE) V0, V11, V12 are cleared. LOAD writes the
+// words through the ALU (V0 + FIFO word). PREP:
+//   0 V13 = V3 >> 16            1 V14 = V1 + V1
+//   2..4 line: V4+i += V4+i     5..7 line: V7+i = V1 + !neg_i
+// RUN, tick step u:
+//   0 V11 += V2 (carry)         1 V12 += V3 + carry; fire on a carry out of
+//                                 the accumulator's top bit
+//   2 V15 = D + mx*x            3 xeq = (x - xe == 0)   4 yeq = (y - ye == 0)
+//   5 S = V15 + my*y: end the segment, iterate (go) or wait; the arc's move
+//   6 go: V1 -= 1
+//   line 7..9  g_i -= 2|d_i|, step_i = (g_i <= 0)
+//        10..12 if step_i: g_i += 2N
+//   arc  7 D += m*c              8 c += m (c = x or y)
+//        9 inc_lo +-= k_lo       10 D += m*c (the new c): D + 2mc + 1 in all
+//       11 inc_hi +-= k_hi + carry
+//   13 go: the position moves.
 #pragma once
 
 #include <cstdint>
 
-#include "arc_interp.hpp"
-#include "feed_gen.hpp"
 #include "interp_seg.hpp"
-#include "line_interp.hpp"
 #include "mc_fixed.hpp"
 #include "seg_fifo.hpp"
 
@@ -47,18 +83,29 @@ class InterpCore {
   static_assert(FIFO_AW >= 4 && FIFO_AW <= 12, "interp_core: FIFO_AW must be 4..12");
 
  public:
-  static constexpr int ST_IDLE = 0, ST_LOAD = 1, ST_RUN = 2;
+  static constexpr int ST_IDLE = 0, ST_LOAD = 1, ST_PREP = 2, ST_RUN = 3;
   static constexpr int DEPTH = 1 << FIFO_AW;
+  static constexpr int TICK = 1 << seg::TICK_LOG2;  // clocks per iteration, at most one
+  static constexpr int PREP_STEPS = 8;
+  static constexpr int INIT_STEPS = 5;  // after reset: equalize, read, clear three words
+  // Longest pause between two steps across a junction, with an iteration
+  // due: from the step that moves (tick step 13) to the end test at the next
+  // tick's step 5, then IDLE, LOAD, PREP, and steps 0..13 of the first tick.
+  static constexpr int STEP_MOVE = 13, STEP_DECIDE = 5;
+  static constexpr int JUNCTION =
+      (TICK - STEP_MOVE + STEP_DECIDE) + 1 + (seg::SEG_WORDS + 1) + PREP_STEPS + STEP_MOVE + 1;
 
   void reset() {
     fifo_.reset();
-    feed_.reset();
     st_ = ST_IDLE;
+    sq_ = 0;
+    ic_ = 0;
     widx_ = ridx_ = 0;
     rv_ = false;
     wi_ = 0;
     drop_ = false;
     pend_ = 0;
+    go_ = false;
     for (int32_t& p : pos_) p = 0;
     underrun_ = ovf_ = false;
     seg_cnt_ = 0;
@@ -67,35 +114,73 @@ class InterpCore {
   // One clock edge.
   void clock(const InterpIn& in) {
     // --- Combinational values from the current state ---
-    const int ridx = ridx_;
-    const bool fire = feed_.fire();
     const int count = fifo_.count();
-    const bool running = st_ == ST_RUN;
-    // An arc's decision is registered (see hls/arc_interp.hpp): valid when ready.
-    const bool arc = type_ == seg::T_ARC;
-    const bool fin = n_left_ == 0 || (arc && arc_.ready() && arc_.fin());
-    const bool it = running && !fin && pend_ != 0 && !in.hold && !in.abort && (!arc || arc_.ready());
-    const ArcStep as = arc_.step();
-    const int lmv = line_.moves();
-    int mv = 0, neg = 0;  // bit a: axis a moves / moves negative
-    if (it && type_ == seg::T_LINE) {
-      mv = lmv;
-      neg = line_.neg();
-    } else if (it && type_ == seg::T_ARC) {
-      const int a = seg::PLANE_AXES[plane_][as.movex ? 0 : 1];
-      mv = 1 << a;
-      neg = as.dir < 0 ? mv : 0;
-    }
+    const uint32_t fd = fifo_.rdata();
+    const int ridx = ridx_;
+    const bool line = type_ == seg::T_LINE, arc = type_ == seg::T_ARC;
     const bool rd = st_ == ST_LOAD && widx_ < seg::SEG_WORDS && !in.abort;
     const bool ld = rv_ && !in.abort;
-    const uint32_t ldata = fifo_.rdata();
-    // Writer: a segment is admitted whole or not at all.
-    const int free = DEPTH - count;
-    const bool drop_n = wi_ == 0 ? free < seg::SEG_WORDS : drop_;
+    const bool drop_n = wi_ == 0 ? DEPTH - count < seg::SEG_WORDS : drop_;
     const bool push = in.wr && !in.abort && !drop_n;
+    // The arc's quadrant and the two moves it allows (towards minus when set).
+    const bool xp = !xn_ && !xz_, yp = !yn_ && !yz_;
+    const bool q1 = ccw_ ? (xp && !yn_) : (!xn_ && yp);
+    const bool q2 = ccw_ ? (!xp && yp) : (xn_ && !yn_);
+    const bool q4 = ccw_ ? (!xn_ && yn_) : (xp && !yp);
+    const bool upper = q1 || q2, right = q1 || q4;
+    const bool mxn = upper == ccw_, myn = right != ccw_;
+    const bool xo = xz_ || (xn_ == mxn);  // the x move is outward
+    const bool final_q = ncross_ == nq_;
+    const int c_addr = movex_ ? 4 : 5;
+    const bool xlock = final_q && xeq_, ylock = final_q && yeq_;
+    // The end of the segment, decided at tick step 5 (flags of this tick).
+    const bool fin = st_ == ST_RUN && sq_ == 5 && (!nz_ || (arc && xlock && ylock));
+
+    // The operation of this clock.
+    Op op;
+    const int u = sq_;
+    if (st_ == ST_IDLE) {
+      // After reset: the RTL's two RAM copies of V1 made equal, then
+      // V1 - V1 = 0 into the zero word and the phase.
+      if (ic_ != 1 && ic_ < INIT_STEPS) op = alu(true, 1, kInitAddr[ic_], W_BOTH);
+    } else if (st_ == ST_LOAD) {
+      if (ld && ridx != seg::W_HDR) op = Op{true, false, 0, ridx, W_BOTH};  // V0 + word
+    } else if (st_ == ST_PREP) {
+      if (u == 0) op = alu(false, 0, 13, W_SWAP);
+      if (u == 1) op = alu(false, 0, 14, W_BOTH);
+      if (u >= 2 && u <= 4) op = alu(false, 0, 2 + u, line ? W_BOTH : W_NONE);
+      if (u >= 5) op = alu(false, ((neg_ >> (u - 5)) & 1) ? 0 : 1, 2 + u, line ? W_BOTH : W_NONE);
+    } else {
+      if (u == 0) op = alu(false, 0, 11, (!in.hold && !in.abort) ? W_BOTH : W_NONE);
+      if (u == 1) op = alu(false, carry_, 12, fen_ ? W_MASK : W_NONE);
+      if (u == 2) op = alu(mxn, mxn, 15, W_BOTH);
+      if (u == 3 || u == 4) op = alu(true, 1, 0, W_NONE);
+      if (u == 5) op = alu(myn, myn, 0, W_NONE);
+      if (u == 6) op = alu(true, 0, 1, go_ ? W_BOTH : W_NONE);
+      if (line && u >= 7 && u <= 9) op = alu(true, 1, u, go_ ? W_BOTH : W_NONE);
+      if (line && u >= 10 && u <= 12)
+        op = alu(false, 0, u - 3, go_ && ((lmv_ >> (u - 10)) & 1) ? W_BOTH : W_NONE);
+      if (arc) {
+        const bool dn = !outw_;  // inward: inc -= k
+        if (u == 7 || u == 10) op = alu(neg_m_, neg_m_, 8, go_ ? W_BOTH : W_NONE);
+        if (u == 8) op = alu(neg_m_, !neg_m_, c_addr, go_ ? W_BOTH : W_NONE);
+        if (u == 9) op = alu(dn, dn, 2, go_ ? W_BOTH : W_NONE);
+        if (u == 11) op = alu(dn, carry_, 3, go_ ? W_LO : W_NONE);
+      }
+    }
+    // The ALU.
+    const uint32_t a = ra_;
+    const uint32_t b = (op.bfd ? fd : rb_) ^ (op.binv ? 0xFFFFFFFFu : 0);
+    const uint64_t sum = uint64_t(a) + b + op.cin;
+    const uint32_t out = uint32_t(sum);
+    const bool cout = (sum >> 32) & 1;
+    const bool zero = out == 0, sign = out >> 31;
+    const bool c16 = ((out ^ a ^ b) >> 16) & 1;                      // carry into bit 16
+    constexpr int PHB = 16 - seg::TICK_LOG2;                         // accumulator bits in V12
+    const uint32_t mask_hi = ((1u << 16) - 1) & ~((1u << PHB) - 1);  // carries out of the accumulator
+    const bool fire = st_ == ST_RUN && u == 1 && fen_ && (c16 || (out & mask_hi) != 0);
 
     // --- Next state ---
-    // Sticky flags: cleared first, so an event in the same cycle wins.
     if (in.clr) underrun_ = ovf_ = false;
     if (in.wr && !in.abort) {
       drop_ = drop_n;
@@ -103,27 +188,81 @@ class InterpCore {
       if (drop_n) ovf_ = true;
     }
 
-    feed_.clock(ld, ridx, ldata, running && !in.hold && !in.abort, it && type_ == seg::T_ARC, as.outward);
+    // The state RAM: reads of this edge see the old contents.
+    const Addr next = next_addr(c_addr);
+    const uint32_t ra_n = mem_[next.a], rb_n = mem_[next.b];
+    if (op.we != W_NONE) {
+      uint32_t& w = mem_[op.wa];
+      if (op.we == W_BOTH) w = out;
+      if (op.we == W_LO) w = (w & 0xFFFF0000u) | (out & 0xFFFFu);
+      if (op.we == W_MASK) w = (w & 0xFFFF0000u) | (out & 0xFFFFu & ~mask_hi);
+      if (op.we == W_SWAP) w = (w & 0xFFFF0000u) | (out >> 16);
+    }
+    ra_ = ra_n;
+    rb_ = rb_n;
+
     if (ld) {
-      line_.load(ridx, ldata);
-      arc_.load(ridx, ldata);
       if (ridx == seg::W_HDR) {
-        type_ = (ldata >> seg::H_TYPE_LSB) & 3;
-        last_ = (ldata >> seg::H_LAST) & 1;
-        plane_ = (ldata >> seg::H_PLANE_LSB) & 3;
+        type_ = (fd >> seg::H_TYPE_LSB) & 3;
+        last_ = (fd >> seg::H_LAST) & 1;
+        ccw_ = (fd >> seg::H_CCW) & 1;
+        plane_ = (fd >> seg::H_PLANE_LSB) & 3;
+        nq_ = (fd >> seg::H_NQ_LSB) & 7;
+        neg_ = (fd >> seg::H_NEG_LSB) & 7;
+        ncross_ = 0;
       }
-      if (ridx == seg::W_N) n_left_ = ldata & seg::N_MASK;
+      if (ridx == seg::W_N) nz_ = !zero;
+      if (ridx == seg::W_A) {
+        xz_ = zero;
+        xn_ = sign;
+      }
+      if (ridx == seg::W_B) {
+        yz_ = zero;
+        yn_ = sign;
+      }
     }
-    if (it) {
-      if (type_ == seg::T_LINE) line_.iterate(lmv);
-      if (arc) arc_.iterate(as);
-      n_left_ = (n_left_ - 1) & seg::N_MASK;
-      for (int a = 0; a < 3; ++a)
-        if ((mv >> a) & 1) pos_[a] = sat32(i128(pos_[a]) + (((neg >> a) & 1) ? -1 : 1));
+    if (st_ == ST_RUN) {
+      if (u == 0) fen_ = !in.hold && !in.abort;
+      if (u == 0 || u == 9) carry_ = cout;
+      if (u == 1 && fire) pend_ = pend_ == 3 ? 3 : pend_ + 1;
+      if (u == 3) xeq_ = zero;
+      if (u == 4) yeq_ = zero;
+      if (line && u >= 7 && u <= 9) lmv_ = (lmv_ & ~(1 << (u - 7))) | int(sign || zero) << (u - 7);
+      if (u == 6 && go_) nz_ = !zero;
+      if (arc && u == 8 && go_) {
+        if (movex_) {
+          xz_ = zero;
+          xn_ = sign;
+        } else {
+          yz_ = zero;
+          yn_ = sign;
+        }
+        if (!outw_ && zero) ncross_ = (ncross_ + 1) & 7;
+      }
+      if (u == 13 && go_) {
+        int mv = 0, neg = 0;  // bit a: axis a moves / moves negative
+        if (line) {
+          mv = lmv_;
+          neg = neg_;
+        } else if (arc) {
+          mv = 1 << seg::PLANE_AXES[plane_][movex_ ? 0 : 1];
+          neg = neg_m_ ? mv : 0;
+        }
+        for (int ax = 0; ax < 3; ++ax)
+          if ((mv >> ax) & 1) pos_[ax] = sat32(i128(pos_[ax]) + (((neg >> ax) & 1) ? -1 : 1));
+        go_ = false;
+      }
+      if (u == 5) {
+        const bool movex = xlock ? false : (ylock ? true : (sign == xo));
+        movex_ = movex;
+        neg_m_ = movex ? mxn : myn;
+        outw_ = movex == xo;
+        if (!fin) {
+          go_ = pend_ != 0 && !in.hold && !in.abort;
+          if (go_) --pend_;
+        }
+      }
     }
-    if (!ld && !(it && arc)) arc_.settle();
-    const int pend_n = pend_ + int(fire) - int(it);
-    pend_ = pend_n > 3 ? 3 : pend_n;
 
     fifo_.clock(in.abort, push, in.wdata, rd);
     rv_ = rd;
@@ -132,17 +271,26 @@ class InterpCore {
     switch (st_) {
       case ST_IDLE:
         if (in.set) {
-          for (int a = 0; a < 3; ++a) pos_[a] = in.set_pos[a];
-        } else if (count >= seg::SEG_WORDS) {
+          for (int ax = 0; ax < 3; ++ax) pos_[ax] = in.set_pos[ax];
+        } else if (ic_ == INIT_STEPS && count >= seg::SEG_WORDS) {
           st_ = ST_LOAD;
           widx_ = 0;
         }
+        if (ic_ < INIT_STEPS) ++ic_;
         break;
       case ST_LOAD:
         if (rd) ++widx_;
-        if (ld && ridx == seg::SEG_WORDS - 1) st_ = ST_RUN;
+        if (ld && ridx == seg::SEG_WORDS - 1) {
+          st_ = ST_PREP;
+          sq_ = 0;
+        }
+        break;
+      case ST_PREP:
+        if (sq_ == PREP_STEPS - 1) st_ = ST_RUN;
+        sq_ = sq_ == PREP_STEPS - 1 ? 0 : sq_ + 1;
         break;
       default:
+        sq_ = (sq_ + 1) & (TICK - 1);
         if (fin) {
           st_ = ST_IDLE;
           seg_cnt_ = (seg_cnt_ + 1) & 0xFFFF;
@@ -156,6 +304,7 @@ class InterpCore {
       wi_ = 0;
       drop_ = false;
       pend_ = 0;
+      go_ = false;
     }
   }
 
@@ -163,8 +312,8 @@ class InterpCore {
   // core settles within two clocks and then stands still; skip(n) is n such
   // clocks.
   bool quiet(const InterpIn& in) const {
-    return st_ == ST_IDLE && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr && !in.abort && !in.clr &&
-           !in.set;
+    return st_ == ST_IDLE && ic_ == INIT_STEPS && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr &&
+           !in.abort && !in.clr && !in.set;
   }
   void skip(uint32_t n) {
     for (uint32_t i = 0; i < n && i < 2; ++i) clock(InterpIn{});
@@ -177,23 +326,98 @@ class InterpCore {
   bool ovf() const { return ovf_; }
   int seg_cnt() const { return seg_cnt_; }
   int count() const { return fifo_.count(); }
-  const FeedGen& feed() const { return feed_; }
-  const ArcInterp& arc() const { return arc_; }
+  // The feed phase, in units of 2^-PH_W iterations (its low TICK_LOG2 bits,
+  // which a per-clock accumulator would hold, are always zero here).
+  uint64_t phase() const {
+    return ((uint64_t(mem_[12] & 0xFFFF) << 32 | mem_[11]) << seg::TICK_LOG2) & seg::PH_MASK;
+  }
 
  private:
+  enum { W_NONE, W_BOTH, W_LO, W_MASK, W_SWAP };
+  // A is always read port a; B is read port b or the FIFO word.
+  struct Op {
+    bool bfd = false, binv = false;  // B: the FIFO word (else read port b), inverted
+    int cin = 0;
+    int wa = 0;  // write address
+    int we = W_NONE;
+  };
+  static Op alu(bool binv, int cin, int wa, int we) { return Op{false, binv, cin, wa, we}; }
+  static constexpr int kInitAddr[INIT_STEPS] = {1, 0, 0, 11, 12};
+  struct Addr {
+    int a = 1, b = 1;
+  };
+  // The read addresses of the next clock's operation, by the current state
+  // and step (the RTL's table).
+  Addr next_addr(int c) const {
+    const bool line = type_ == seg::T_LINE;
+    if (st_ == ST_IDLE) return {1, 1};  // init: V - V = 0
+    if (st_ == ST_LOAD) return {0, 3};
+    if (st_ == ST_PREP) {
+      switch (sq_) {
+        case 0:
+          return {1, 1};
+        case 1:
+          return {4, 4};
+        case 2:
+          return {5, 5};
+        case 3:
+          return {6, 6};
+        case 7:
+          return {11, 2};
+        default:
+          return {1, 0};
+      }
+    }
+    switch (sq_) {
+      case 15:
+        return {11, 2};
+      case 0:
+        return {12, 3};
+      case 1:
+        return {8, 4};
+      case 2:
+        return {4, 6};
+      case 3:
+        return {5, 7};
+      case 4:
+        return {15, 5};
+      case 6:
+        return line ? Addr{7, 4} : Addr{8, c};
+      case 7:
+        return line ? Addr{8, 5} : Addr{c, 0};
+      case 8:
+        return line ? Addr{9, 6} : Addr{2, 9};
+      case 9:
+        return line ? Addr{7, 14} : Addr{8, c};
+      case 10:
+        return line ? Addr{8, 14} : Addr{3, 13};
+      case 11:
+        return {9, 14};
+      default:
+        return {1, 0};
+    }
+  }
+
   SegFifo<FIFO_AW> fifo_;
-  FeedGen feed_;
-  LineInterp line_;
-  ArcInterp arc_;
+  uint32_t mem_[16] = {};
+  uint32_t ra_ = 0, rb_ = 0;
   int st_ = ST_IDLE;
+  int sq_ = 0;  // PREP step or RUN tick step
+  int ic_ = 0;  // init steps done after reset
   int widx_ = 0, ridx_ = 0;
   bool rv_ = false;
   int wi_ = 0;
   bool drop_ = false;
   int pend_ = 0;
-  int type_ = 0, plane_ = 0;
-  bool last_ = false;
-  uint32_t n_left_ = 0;
+  bool go_ = false, fen_ = false, carry_ = false;
+  // segment header
+  int type_ = 0, plane_ = 0, nq_ = 0, neg_ = 0;
+  bool last_ = false, ccw_ = false;
+  // flags of the running segment
+  bool nz_ = false, xz_ = false, xn_ = false, yz_ = false, yn_ = false, xeq_ = false, yeq_ = false;
+  int ncross_ = 0;
+  int lmv_ = 0;  // line: axes that step this iteration
+  bool movex_ = false, neg_m_ = false, outw_ = false;
   int32_t pos_[3] = {};
   bool underrun_ = false, ovf_ = false;
   int seg_cnt_ = 0;

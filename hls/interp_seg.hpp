@@ -24,7 +24,7 @@
 //         [3] ccw (arc), [5:4] plane (arc), [8:6] nq (arc: quadrant
 //         crossings before the final quadrant), [11:9] negative x, y, z (line).
 // inc is the feed generator's phase increment (iterations per clock * 2^PH_W);
-// for arcs it is modulated by +-k per step (see hls/feed_gen.hpp).
+// for arcs it is modulated by +-k per step (see hls/interp_core.hpp).
 #pragma once
 
 #include <array>
@@ -37,6 +37,9 @@ constexpr int PH_W = 48;   // feed generator phase accumulator bits
 constexpr int N_W = 26;    // iteration counts and line deltas (counts)
 constexpr int ARC_W = 23;  // arc coordinates relative to the centre, signed
 constexpr int D_W = 27;    // circle decision variable, signed
+// The core runs at most one iteration per tick of 2^TICK_LOG2 clocks (its
+// serial engine, hls/interp_core.hpp): inc must stay below 2^(PH_W - TICK_LOG2).
+constexpr int TICK_LOG2 = 4;
 
 // Word indices.
 constexpr int W_HDR = 0;

@@ -1,4 +1,7 @@
-// line_interp twin: Bresenham line in up to three axes. Mirrors rtl/line_interp.v.
+// line_interp: Bresenham line in up to three axes, one iteration at a time:
+// the reference for the path of rtl/interp_core.v's serial engine (which
+// keeps g = 2N - E for each axis, see hls/interp_core.hpp), used by the host
+// planner's walk() and by the tests that compare the core step for step.
 //
 // N = max |d| iterations; each iteration the major axis moves one count and
 // every other axis moves when its error term overflows, so the path is

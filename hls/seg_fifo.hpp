@@ -2,9 +2,11 @@
 // first-out queue of 32-bit words in block RAM. Mirrors rtl/seg_fifo.v.
 //
 // A read strobe takes the oldest word; it appears on rdata() after the clock
-// edge (registered, as block RAM reads are). A write when full, or a read
-// when empty, is ignored; flush empties the queue. Keeping segments whole is
-// the writer's job (interp_core admits a segment only when all of it fits).
+// edge (registered, as block RAM reads are); flush empties the queue. The
+// user never writes when full nor reads when empty (interp_core admits a
+// segment only when all of it fits and loads one only when all of it is
+// queued), so, as in the RTL, nothing checks; keeping segments whole is the
+// user's job too.
 #pragma once
 
 #include <cstdint>
@@ -23,8 +25,7 @@ class SegFifo {
       reset();
       return;
     }
-    const bool do_wr = wr && count_ < DEPTH;
-    const bool do_rd = rd && count_ > 0;
+    const bool do_wr = wr, do_rd = rd;
     if (do_rd) {
       rdata_ = mem_[rp_];
       rp_ = (rp_ + 1) & (DEPTH - 1);

@@ -12,6 +12,9 @@ namespace mc::host {
 namespace {
 
 constexpr double kTwoPowPh = 281474976710656.0;  // 2^PH_W
+// The core runs at most one iteration per tick of 2^TICK_LOG2 clocks, so a
+// rate word must stay below 2^(PH_W - TICK_LOG2).
+constexpr double kIncMax = kTwoPowPh / double(1 << seg::TICK_LOG2);
 constexpr int64_t kArcMax = (int64_t(1) << (seg::ARC_W - 1)) - 2;
 constexpr int64_t kNMax = (int64_t(1) << seg::N_W) - 1;
 
@@ -27,12 +30,23 @@ void check_feed(double feed) {
     throw InputError("feed", format_number(feed), "a positive number of counts per second");
 }
 
-// Rate word for f iterations per second; 0 < inc < 2^PH_W.
+}  // namespace
+
+double max_iteration_rate(double clk_hz) {
+  return clk_hz / double(1 << seg::TICK_LOG2);
+}
+
+namespace {
+
+// Rate word for f iterations per second; 0 < inc < kIncMax.
 uint64_t rate_word(double f, double clk_hz, const char* what) {
   const double inc = std::round(f / clk_hz * kTwoPowPh);
-  if (inc >= kTwoPowPh)
+  if (inc >= kIncMax)
     throw InputError(what, format_number(f) + " iterations/s",
-                     "less than the clock rate " + format_number(clk_hz) + " Hz", "feed too high");
+                     "less than " + format_number(max_iteration_rate(clk_hz)) +
+                         " iterations/s (the core runs one iteration per " +
+                         std::to_string(1 << seg::TICK_LOG2) + " clocks at most)",
+                     "feed too high");
   if (inc < 1)
     throw InputError(what, format_number(f) + " iterations/s",
                      "at least " + format_number(clk_hz / kTwoPowPh) + " iterations/s", "feed too low");
@@ -182,15 +196,20 @@ PlannedSegment plan_arc(const Vec3& from, const Vec3& to, const std::array<int64
   // Iteration rate f = feed * (|x| + |y|) / R, i.e. inc = k * (|x| + |y|).
   const double k = feed / (g.radius * clk_hz) * kTwoPowPh;
   const double kr = std::round(k);
-  const int64_t smax = 2 * (g.crossing + 1);
+  // The walk stays within one step of the circle, so |x| + |y| <= sqrt(2) (R + 1).
+  const int64_t smax = int64_t(std::ceil(std::sqrt(2.0) * (g.radius + 1)));
   if (kr < 1)
     throw InputError(
         "feed", format_number(feed) + " counts/s",
         "at least " + format_number(0.5 * g.radius * clk_hz / kTwoPowPh) + " counts/s on this arc",
         "feed too low for the rate word");
-  if (kr * double(smax) >= kTwoPowPh)
+  if (kr * double(smax) >= kIncMax)
     throw InputError("feed", format_number(feed) + " counts/s",
-                     "less than " + format_number(clk_hz / std::sqrt(2.0)) + " counts/s", "feed too high");
+                     "less than " + format_number(max_iteration_rate(clk_hz) / std::sqrt(2.0)) +
+                         " counts/s (at 45 degrees that is " + format_number(max_iteration_rate(clk_hz)) +
+                         " iterations/s, one per " + std::to_string(1 << seg::TICK_LOG2) +
+                         " clocks, the core's most)",
+                     "feed too high");
   s.k = uint64_t(kr);
   s.inc = s.k * uint64_t(std::llabs(g.x0) + std::llabs(g.y0));
   p.feed_rel_error = kr / k - 1;

@@ -54,6 +54,10 @@ int64_t arc_axis_crossing(int64_t r2);
 // (an arc run backwards from where another one ended, say).
 ArcGeometry arc_geometry(int64_t x0, int64_t y0, int64_t xe, int64_t ye, bool ccw, int64_t r2 = 0);
 
+// The highest iteration rate the core runs (one iteration per tick of
+// 2^TICK_LOG2 clocks), iterations/s; the planners refuse feeds above it.
+double max_iteration_rate(double clk_hz = kDefaultClockHz);
+
 PlannedSegment plan_line(const Vec3& from, const Vec3& to, double feed, double clk_hz = kDefaultClockHz);
 // plane: seg::PLANE_XY (x, y), PLANE_ZX (z, x) or PLANE_YZ (y, z); centre in
 // absolute counts on that plane's two axes. The third axis must not change.

@@ -6,6 +6,7 @@ localparam integer SEG_PH_W = 48;   // feed phase accumulator bits
 localparam integer SEG_N_W = 26;    // iteration counts, line deltas
 localparam integer SEG_ARC_W = 23;  // arc coordinates relative to the centre
 localparam integer SEG_D_W = 27;    // circle decision variable
+localparam integer SEG_TICK_LOG2 = 4;  // at most one iteration per 2^this clocks
 // word indices
 localparam integer SEG_W_HDR = 0;
 localparam integer SEG_W_N = 1;

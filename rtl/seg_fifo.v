@@ -1,10 +1,12 @@
 // seg_fifo: the interpolator's command FIFO, 32-bit words in block RAM.
 // Twin: hls/seg_fifo.hpp.
 //
-// How to drive it: wr_i with wdata_i appends a word (ignored when full);
-// rd_i takes the oldest (ignored when empty), which appears on rdata_o after
-// the clock edge, as block RAM reads do. count_o is the number of words held.
-// flush_i empties it. Keeping segments whole is the writer's job.
+// How to drive it: wr_i with wdata_i appends a word; rd_i takes the oldest,
+// which appears on rdata_o after the clock edge, as block RAM reads do.
+// count_o is the number of words held. flush_i empties it. The user never
+// writes when full nor reads when empty (interp_core admits a segment only
+// when all of it fits and loads one only when all of it is queued), so the
+// FIFO spends no logic checking; keeping segments whole is the user's job too.
 `default_nettype none
 
 module seg_fifo #(
@@ -26,14 +28,15 @@ module seg_fifo #(
 );
 
   localparam integer DEPTH = 1 << AW;
-  /* verilator lint_off WIDTH */
-  localparam [AW:0] FULL = DEPTH;
-  /* verilator lint_on WIDTH */
 
+  // A read and a write never meet at one address (equal pointers mean empty,
+  // when the user reads nothing, or full, when it writes nothing), so Yosys
+  // needs no collision logic around the block RAM.
+  (* no_rw_check *)
   reg [31:0] mem[0:DEPTH-1];
   reg [AW-1:0] wp, rp;
-  wire do_wr = wr_i && count_o != FULL && !flush_i;
-  wire do_rd = rd_i && count_o != {(AW + 1) {1'b0}} && !flush_i;
+  wire do_wr = wr_i && !flush_i;
+  wire do_rd = rd_i && !flush_i;
 
   // Storage and read port: plain synchronous RAM so Yosys maps it to EBR.
   always @(posedge clk) begin
@@ -49,7 +52,8 @@ module seg_fifo #(
     end else begin
       if (do_wr) wp <= wp + 1'b1;
       if (do_rd) rp <= rp + 1'b1;
-      count_o <= count_o + {{AW{1'b0}}, do_wr} - {{AW{1'b0}}, do_rd};
+      // +1 or -1 as one carry chain; a write and a read together cancel.
+      if (do_wr != do_rd) count_o <= count_o + {{AW{do_rd}}, 1'b1};
     end
   end
 

@@ -7,7 +7,11 @@
 //     all, and every point is within one step of the true circle;
 //   - the step count equals the formula (line: max|d|; arc: per quadrant
 //     |dx| + |dy|), and the segment ends exactly on its end point;
-//   - segments run in the order queued, none lost, none repeated.
+//   - segments run in the order queued, none lost, none repeated;
+//   - every point is the one the reference engines visit (host::walk runs
+//     hls/line_interp.hpp and hls/arc_interp.hpp, the per-iteration models the
+//     serial engine of interp_core replaced), so the path is exactly the old
+//     one, step for step.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -18,6 +22,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "errors.hpp"
 #include "interp_plan.hpp"
@@ -28,12 +33,13 @@ using host::PlannedSegment;
 using host::Vec3;
 
 constexpr double kClk = host::kDefaultClockHz;
+const double kMaxRate = host::max_iteration_rate(kClk);  // iterations/s
 
 struct SegGen {
   std::mt19937_64 rng;
   int64_t max_line = 300;  // counts per axis
   int64_t max_radius = 200;
-  double min_rate = 0.15;  // peak iteration rate, fraction of the clock
+  double min_rate = 0.15;  // peak iteration rate, fraction of the core's highest
   double max_rate = 0.6;
   bool dwells = true;
   bool planes = true;
@@ -57,7 +63,7 @@ struct SegGen {
     // iteration rate drawn.
     const PlannedSegment g = host::plan_line(at, to, 1000.0, kClk);
     if (g.seg.n == 0) return g;
-    const double f = uni(min_rate, max_rate) * kClk;
+    const double f = uni(min_rate, max_rate) * kMaxRate;
     return host::plan_line(at, to, f * g.length / double(g.seg.n), kClk);
   }
 
@@ -80,7 +86,7 @@ struct SegGen {
       to[size_t(ax)] = c[0] + xe;
       to[size_t(ay)] = c[1] + ye;
       // Peak rate feed*sqrt(2) at 45 degrees.
-      const double feed = uni(min_rate, max_rate) * kClk / std::sqrt(2.0);
+      const double feed = uni(min_rate, max_rate) * kMaxRate / std::sqrt(2.0);
       try {
         return host::plan_arc(at, to, c, irange(0, 1) == 1, feed, plane, kClk);
       } catch (const host::InputError&) {
@@ -104,7 +110,12 @@ class PathChecker {
  public:
   explicit PathChecker(const Vec3& start) : pos_(start) {}
 
-  void expect(const PlannedSegment& s) { q_.push_back(s); }
+  void expect(const PlannedSegment& s) {
+    q_.push_back(s);
+    std::vector<Vec3> pts;
+    host::walk(s, [&](const Vec3& v) { pts.push_back(v); });
+    ref_.push_back(std::move(pts));
+  }
   int checked() const { return checked_; }
   int64_t steps() const { return total_steps_; }
   size_t pending() const { return q_.size(); }
@@ -152,6 +163,14 @@ class PathChecker {
       moved += d != 0;
     }
     if (s.seg.type == seg::T_DWELL) fail("a dwell moved");
+    if (s.seg.type != seg::T_DWELL) {
+      const std::vector<Vec3>& ref = ref_.front();
+      const size_t k = size_t(steps_) + 1;
+      if (k >= ref.size())
+        fail("more steps than the reference path");
+      else if (ref[k] != to)
+        fail("step " + std::to_string(k) + " differs from the reference path");
+    }
     if (s.seg.type == seg::T_LINE) {
       // Bresenham: the minor axes sit within half a count of the ideal line.
       ++steps_;
@@ -188,9 +207,11 @@ class PathChecker {
     steps_ = 0;
     ++checked_;
     q_.pop_front();
+    ref_.pop_front();
   }
 
   std::deque<PlannedSegment> q_;
+  std::deque<std::vector<Vec3>> ref_;  // each segment's points, from host::walk
   Vec3 pos_;
   int last_cnt_ = 0;
   int64_t steps_ = 0, total_steps_ = 0;

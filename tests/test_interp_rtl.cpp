@@ -254,7 +254,7 @@ TEST(InterpRtl, FifoOverflowDropsWholeSegmentsInOrder) {
     Vec3 to = at;
     to[0] += 2 + i % 4;
     to[2] -= i % 3;
-    const auto p = host::plan_line(at, to, 2e6);
+    const auto p = host::plan_line(at, to, 5e5);
     rig.hold_rate = 1;  // hold: nothing drains while we overfill
     if (rig.push(p)) {
       ++admitted;
@@ -282,14 +282,14 @@ TEST(InterpRtl, UnderrunHoldsAndResumes) {
   Rig rig(4);
   PathChecker chk({0, 0, 0});
   rig.chk = &chk;
-  const auto a = host::plan_arc({0, 0, 0}, {0, 0, 0}, {-40, 30}, true, 1e6);  // full circle, R = 50
+  const auto a = host::plan_arc({0, 0, 0}, {0, 0, 0}, {-40, 30}, true, 5e5);  // full circle, R = 50
   ASSERT_TRUE(rig.push(a));
   chk.expect(a);
   rig.drain();
   EXPECT_TRUE(rig.sim.underrun());
   for (int i = 0; i < 5000; ++i) rig.clock();
   EXPECT_EQ(rig.sim.pos(), (Vec3{0, 0, 0}));
-  auto b = host::plan_line({0, 0, 0}, {-17, 9, 4}, 1e6);
+  auto b = host::plan_line({0, 0, 0}, {-17, 9, 4}, 5e5);
   b.seg.last = true;
   ASSERT_TRUE(rig.push(b));
   chk.expect(b);

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "interp_bench.hpp"
@@ -152,15 +154,17 @@ TEST(InterpTwin, ArcStepCountMatchesThePaperForAQuarter) {
   }
 }
 
+// The message a planner call throws, or "no error".
+std::string msg(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const host::InputError& e) {
+    return std::string(e.what());
+  }
+  return std::string("no error");
+}
+
 TEST(InterpPlan, BadGeometryIsAClearError) {
-  auto msg = [](auto f) {
-    try {
-      f();
-    } catch (const host::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(msg([] {
               host::plan_arc({0, 0, 0}, {1, 0, 0}, {0, 0}, true, 1000);
             }).find("zero radius"),
@@ -252,23 +256,29 @@ TEST(InterpCoreTwin, RandomSegmentsRunInOrderWithAllProperties) {
   EXPECT_FALSE(rig.core.ovf());
 }
 
-TEST(InterpCoreTwin, LineRateIsExactWithNoDrift) {
-  // A long line at an awkward rate: after any number of clocks exactly
-  // floor(clocks * inc / 2^48) iterations have fired (less the ones still due).
-  TwinRig rig;
-  const auto p = host::plan_line({0, 0, 0}, {3000000, 1234567, 0}, 123456.789);
+// Runs a long line along x from the origin: after any number of clocks
+// exactly floor(clocks * inc / 2^48) iterations have fired, less the ones
+// still due or in the pipeline (at most two). Returns the clocks run.
+uint64_t expect_no_drift(TwinRig& rig, const PlannedSegment& p, int rounds, int clocks) {
   rig.push(p, nullptr);
-  while (!rig.core.busy()) rig.clock();
   while (rig.core.state() != InterpCore<9>::ST_RUN) rig.clock();
   const uint64_t t0 = rig.clocks;
   const long double inc = static_cast<long double>(p.seg.inc);
-  for (int i = 0; i < 5; ++i) {
-    for (int k = 0; k < 2000000; ++k) rig.clock();
+  for (int i = 0; i < rounds; ++i) {
+    for (int k = 0; k < clocks; ++k) rig.clock();
     const long double expect = std::floor((rig.clocks - t0) * inc / 281474976710656.0L);
     const long double got = rig.core.pos(0);
     EXPECT_LE(expect - got, 2) << "after " << rig.clocks - t0 << " clocks";
     EXPECT_GE(expect - got, 0);
   }
+  return rig.clocks - t0;
+}
+
+TEST(InterpCoreTwin, LineRateIsExactWithNoDrift) {
+  // A long line at an awkward rate.
+  TwinRig rig;
+  const auto p = host::plan_line({0, 0, 0}, {3000000, 1234567, 0}, 123456.789);
+  expect_no_drift(rig, p, 5, 2000000);
   // The feed itself: the iteration rate times the path per iteration.
   const double rate = double(p.seg.inc) / 281474976710656.0 * kClk;
   EXPECT_NEAR(rate * p.length / double(p.seg.n), 123456.789, 123456.789 * 1e-9);
@@ -329,7 +339,7 @@ TEST(InterpCoreTwin, ArcTangentialSpeedIsTheFeedAllRound) {
 
 TEST(InterpCoreTwin, UnderrunHoldsPositionAndFlags) {
   TwinRig rig;
-  auto a = host::plan_line({0, 0, 0}, {50, 20, 0}, 2e6);
+  auto a = host::plan_line({0, 0, 0}, {50, 20, 0}, 5e5);
   rig.push(a, nullptr);
   for (int i = 0; i < 2000; ++i) rig.clock();
   EXPECT_TRUE(rig.core.underrun());
@@ -340,7 +350,7 @@ TEST(InterpCoreTwin, UnderrunHoldsPositionAndFlags) {
   rig.clock();
   EXPECT_FALSE(rig.core.underrun());
   // A segment marked last ends the program: no underrun.
-  auto b = host::plan_line({50, 20, 0}, {0, 0, 0}, 2e6);
+  auto b = host::plan_line({50, 20, 0}, {0, 0, 0}, 5e5);
   b.seg.last = true;
   rig.push(b, nullptr);
   for (int i = 0; i < 2000; ++i) rig.clock();
@@ -359,7 +369,7 @@ TEST(InterpCoreTwin, OverflowDropsWholeSegmentsAndKeepsStep) {
     Vec3 to = at;
     to[0] += 3;
     to[1] += i % 3;
-    const auto p = host::plan_line(at, to, 1e6);
+    const auto p = host::plan_line(at, to, 5e5);
     const bool room = rig.core.count() <= InterpCore<9>::DEPTH - seg::SEG_WORDS;
     const seg::Words w = seg::pack(p.seg);
     for (uint32_t word : w) {
@@ -428,7 +438,8 @@ TEST(InterpCoreTwin, HoldAbortAndSet) {
 
 TEST(InterpCoreTwin, SegmentsRunBackToBackWithoutAStop) {
   // Two lines at an iteration rate of one per 20 clocks: the junction costs
-  // at most the load time, and no iteration is lost over the pair.
+  // at most the end test, load and preparation (JUNCTION), and no iteration
+  // is lost over the pair.
   TwinRig rig;
   const double feed = kClk / 20;
   const auto a = host::plan_line({0, 0, 0}, {400, 0, 0}, feed);
@@ -447,8 +458,39 @@ TEST(InterpCoreTwin, SegmentsRunBackToBackWithoutAStop) {
   ASSERT_EQ(t.size(), 800u);
   uint64_t worst = 0;
   for (size_t i = 1; i < t.size(); ++i) worst = std::max(worst, t[i] - t[i - 1]);
-  EXPECT_LE(worst, 20u + seg::SEG_WORDS + 3) << "largest gap between steps, clocks";
-  EXPECT_NEAR(double(t.back() - t.front()), 799 * 20.0, 20.0 + seg::SEG_WORDS + 3);
+  constexpr int kJunction = InterpCore<9>::JUNCTION;
+  EXPECT_LE(worst, uint64_t(kJunction)) << "largest gap between steps, clocks";
+  EXPECT_NEAR(double(t.back() - t.front()), 799 * 20.0, kJunction);
+}
+
+TEST(InterpCoreTwin, TheHighestRateRunsOneIterationPerTickWithoutLoss) {
+  // The planner's highest feed: one iteration per TICK clocks. Every fire of
+  // the phase accumulator runs; after any number of clocks exactly
+  // floor(clocks * inc / 2^48) iterations have fired, less at most the ones
+  // still in the pipeline.
+  constexpr int kTick = InterpCore<9>::TICK;
+  const double top = host::max_iteration_rate(kClk) * (1 - 1e-9);
+  const auto p = host::plan_line({0, 0, 0}, {4000000, 0, 0}, top);
+  EXPECT_LT(p.seg.inc, uint64_t(1) << (seg::PH_W - seg::TICK_LOG2));
+  EXPECT_GT(p.seg.inc, (uint64_t(1) << (seg::PH_W - seg::TICK_LOG2)) - 100000);
+  TwinRig rig;
+  const uint64_t clocks = expect_no_drift(rig, p, 4, 3000000);
+  EXPECT_NEAR(double(rig.core.pos(0)), double(clocks) / kTick, 2.0);
+  // Above it the planners refuse, with the limit in the message.
+  const double over = host::max_iteration_rate(kClk) * 1.001;
+  EXPECT_NE(msg([&] {
+              host::plan_line({0, 0, 0}, {1000, 0, 0}, over);
+            }).find("feed too high"),
+            std::string::npos);
+  EXPECT_NE(msg([&] {
+              host::plan_line({0, 0, 0}, {1000, 0, 0}, over);
+            }).find("750000 iterations/s"),
+            std::string::npos);
+  EXPECT_NE(msg([&] {
+              host::plan_arc({1000, 0, 0}, {0, 1000, 0}, {0, 0}, true, over / std::sqrt(2.0));
+            }).find("feed too high"),
+            std::string::npos);
+  EXPECT_NO_THROW(host::plan_arc({1000, 0, 0}, {0, 1000, 0}, {0, 0}, true, 0.99 * top / std::sqrt(2.0)));
 }
 
 }  // namespace

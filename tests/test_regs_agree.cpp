@@ -70,6 +70,7 @@ TEST(RegsAgree, InterpolatorSegmentFormat) {
                                            {"SEG_N_W", N_W},
                                            {"SEG_ARC_W", ARC_W},
                                            {"SEG_D_W", D_W},
+                                           {"SEG_TICK_LOG2", TICK_LOG2},
                                            {"SEG_W_HDR", W_HDR},
                                            {"SEG_W_N", W_N},
                                            {"SEG_W_INC_LO", W_INC_LO},
