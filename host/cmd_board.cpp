@@ -123,7 +123,7 @@ std::vector<int> axes_of(const std::string& axis, int naxes) {
   return v;
 }
 
-void enable(const std::string& axis) {
+void enable(const std::string& axis, bool json) {
   if (!axis.empty()) parse_axis(axis);  // a bad name is an error before any port is opened
   Board b = open_board();
   BoardLink& l = *b.link;
@@ -139,6 +139,15 @@ void enable(const std::string& axis) {
   arm(l, note);
   for (int a : axes) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1, 1);
   const BoardState s = read_state(l);
+  if (json) {
+    nlohmann::ordered_json j;
+    j["enabled"] = nlohmann::json::array();
+    for (int a : axes) j["enabled"].push_back(axis_name(a));
+    j["armed"] = true;
+    j["watchdog"] = watchdog_text(s);
+    std::cout << j.dump(2) << '\n';
+    return;
+  }
   std::string names;
   for (int a : axes) names += (names.empty() ? "" : ", ") + std::string(axis_name(a));
   std::cout << "enabled " << names << "; drives armed.\n"
@@ -147,37 +156,54 @@ void enable(const std::string& axis) {
             << "jog and move arm them again for their motion.\n";
 }
 
-void disable(const std::string& axis) {
+void disable(const std::string& axis, bool json) {
   if (!axis.empty()) parse_axis(axis);
   Board b = open_board();
   BoardLink& l = *b.link;
   const int naxes = int(l.read(br::INFO) & 0xF);
   if (axis.empty()) l.write(br::CTRL, 0);
-  for (int a : axes_of(axis, naxes)) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 0, 1);
+  const std::vector<int> axes = axes_of(axis, naxes);
+  for (int a : axes) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 0, 1);
+  if (json) {
+    nlohmann::ordered_json j;
+    j["disabled"] = nlohmann::json::array();
+    for (int a : axes) j["disabled"].push_back(axis_name(a));
+    j["drives_off"] = axis.empty();
+    std::cout << j.dump(2) << '\n';
+    return;
+  }
   std::cout << (axis.empty() ? "drives off, every axis disabled\n" : "disabled " + axis + "\n");
 }
 
-void clear_fault() {
+void clear_fault(bool json) {
   Board b = open_board();
   BoardLink& l = *b.link;
   const uint32_t f = l.read(br::FAULT);
-  if (f == 0) {
-    std::cout << "no fault latched\n";
-    return;
+  if (f != 0) {
+    l.write(br::FAULT, f);
+    const uint32_t still = l.read(br::FAULT);
+    if (still) throw BoardError("fault still latched, its cause is present: " + fault_names(still));
   }
-  l.write(br::FAULT, f);
-  const uint32_t still = l.read(br::FAULT);
-  if (still) throw BoardError("fault still latched, its cause is present: " + fault_names(still));
-  std::cout << "cleared: " << fault_names(f) << " (the drives stay off until enable, jog or move)\n";
+  if (json) {
+    nlohmann::ordered_json j;
+    j["cleared"] = f == 0 ? "" : fault_names(f);
+    j["fault_word"] = f;
+    std::cout << j.dump(2) << '\n';
+  } else if (f == 0) {
+    std::cout << "no fault latched\n";
+  } else {
+    std::cout << "cleared: " << fault_names(f) << " (the drives stay off until enable, jog or move)\n";
+  }
 }
 
 // ---- jog / move -------------------------------------------------------------------
 struct MotionOptions {
   std::string axis, distance, feed, target;
+  bool json = false;
 };
 
 void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::array<double, 3>&)>& target,
-             const std::string& feed_text) {
+             const std::string& feed_text, bool json) {
   const double feed_mm_min = parse_number(feed_text, "--feed");
   if (!(feed_mm_min > 0)) throw InputError("--feed", quote(feed_text), "a feed above 0 mm/min");
   const auto scale = axis_scales();
@@ -189,22 +215,27 @@ void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::arra
   for (int a = 0; a < 3; ++a)
     if (to[size_t(a)] != from[size_t(a)] && cpm == 0) cpm = scale[size_t(a)];
   if (cpm == 0) {
-    std::cout << "already there\n";
+    std::cout << (json ? "{\n  \"moved\": false\n}\n" : "already there\n");
     return;
   }
   const double clk = double(l.read(br::CLK_HZ));
   const auto segs = plan_move(from, to, feed_mm_min / 60e3 * cpm, clk);
   run_segments(l, segs);
-  std::cout << "done:";
+  nlohmann::ordered_json j;
+  j["moved"] = true;
+  j["axes"] = nlohmann::json::array();
+  std::string line = "done:";
   for (int a = 0; a < 3; ++a) {
     if (scale[size_t(a)] == 0) continue;
     const int32_t pos = int32_t(l.read(br::axis(a, br::AX_POS)));
+    const double pos_mm = pos / scale[size_t(a)] * 1e3,
+                 cmd_mm = double(to[size_t(a)]) / scale[size_t(a)] * 1e3;
+    j["axes"].push_back({{"axis", axis_name(a)}, {"position_mm", pos_mm}, {"command_mm", cmd_mm}});
     char b[96];
-    std::snprintf(b, sizeof b, " %s %.4f mm (command %.4f)", axis_name(a), pos / scale[size_t(a)] * 1e3,
-                  double(to[size_t(a)]) / scale[size_t(a)] * 1e3);
-    std::cout << b;
+    std::snprintf(b, sizeof b, " %s %.4f mm (command %.4f)", axis_name(a), pos_mm, cmd_mm);
+    line += b;
   }
-  std::cout << '\n';
+  std::cout << (json ? j.dump(2) : line) << '\n';
 }
 
 void require_enabled(BoardLink& l, int a) {
@@ -228,7 +259,7 @@ void jog(const MotionOptions& o) {
         to[size_t(a)] += std::llround(mm * 1e-3 * s[size_t(a)]);
         return to;
       },
-      o.feed);
+      o.feed, o.json);
 }
 
 void move(const MotionOptions& o) {
@@ -251,7 +282,7 @@ void move(const MotionOptions& o) {
         for (size_t a = 0; a < mm.size(); ++a) to[a] = std::llround(mm[a] * 1e-3 * s[a]);
         return to;
       },
-      o.feed);
+      o.feed, o.json);
 }
 
 constexpr const char* kBoardFooter =
@@ -274,17 +305,23 @@ void add_board_commands(CLI::App& app) {
       "\nThe watchdog turns the drives off one WDOG period (100 ms by default) after the last frame, so\n"
       "they go off when this command exits: the intended safety behaviour. jog and move arm again.");
   en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")->type_name("AXIS");
-  en->callback([axis] { enable(*axis); });
+  auto ejson = std::make_shared<bool>(false);
+  en->add_flag("--json", *ejson, "One JSON object");
+  en->callback([axis, ejson] { enable(*axis, *ejson); });
 
   auto daxis = std::make_shared<std::string>();
   CLI::App* dis = app.add_subcommand("disable", "Disable the PID of an axis; without --axis also disarm");
   dis->footer(kBoardFooter);
   dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")->type_name("AXIS");
-  dis->callback([daxis] { disable(*daxis); });
+  auto djson = std::make_shared<bool>(false);
+  dis->add_flag("--json", *djson, "One JSON object");
+  dis->callback([daxis, djson] { disable(*daxis, *djson); });
 
   CLI::App* cf = app.add_subcommand("clear-fault", "Clear the latched faults whose cause is gone");
   cf->footer(kBoardFooter);
-  cf->callback([] { clear_fault(); });
+  auto cjson = std::make_shared<bool>(false);
+  cf->add_flag("--json", *cjson, "One JSON object");
+  cf->callback([cjson] { clear_fault(*cjson); });
 
   auto jo = std::make_shared<MotionOptions>();
   CLI::App* jg = app.add_subcommand("jog", "Move one axis by a distance at a feed, and wait until done");
@@ -294,6 +331,7 @@ void add_board_commands(CLI::App& app) {
   jg->add_option("--axis", jo->axis, "x, y or z")->required()->type_name("AXIS");
   jg->add_option("--distance", jo->distance, "mm, signed")->required()->type_name("MM");
   jg->add_option("--feed", jo->feed, "mm/min along the path")->required()->type_name("MM/MIN");
+  jg->add_flag("--json", jo->json, "One JSON object");
   jg->callback([jo] { jog(*jo); });
 
   auto mo = std::make_shared<MotionOptions>();
@@ -301,6 +339,7 @@ void add_board_commands(CLI::App& app) {
   mv->footer(jg->get_footer());
   mv->add_option("target", mo->target, "X,Y or X,Y,Z in mm")->required()->type_name("X,Y[,Z]");
   mv->add_option("--feed", mo->feed, "mm/min along the path")->required()->type_name("MM/MIN");
+  mv->add_flag("--json", mo->json, "One JSON object");
   mv->callback([mo] { move(*mo); });
 }
 
