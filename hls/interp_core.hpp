@@ -24,7 +24,7 @@
 // A from read port a and B from read port b or the FIFO word, runs a fixed
 // schedule over a 16-word state RAM (block RAM with two read ports and one
 // write port; reads are registered, so each step's addresses are issued the
-// step before, and no step reads a word in the clock it is written). A tick
+// step before, and no step uses a word read in the clock it is written). A tick
 // of TICK = 2^TICK_LOG2 clocks advances the feed phase once and runs at most
 // one iteration, so the iteration rate is at most f_clk / TICK. The phase
 // keeps the meaning of the segment's rate word (iterations per clock *

@@ -165,33 +165,97 @@ module interp_core #(
       default:     lax = 2'd0;
     endcase
   end
-  wire [1:0] psq = sq[1:0] - 2'd1;  // PREP steps 5..7: the axis whose g starts
+  wire [1:0] psq = sq[1:0];  // PREP steps 4..6 decode steps 5..7: the axis whose g starts
 
   // --- The operation of this clock --------------------------------------------
   // A is read port a; B is read port b or the FIFO word, inverted by binv.
-  reg bfd, binv, cin;
+  // The operand controls (bfd, binv, cin) are registered, decoded a clock
+  // ahead for the step that follows, so that no decoding sits in front of
+  // the carry chain; the flags they depend on are settled a clock before
+  // their steps. A step the prediction gets wrong never writes: the first
+  // LOAD clock (no word yet) and IDLE after a segment (init is over); only
+  // the LOAD -> PREP edge is decoded exactly. cin takes the carry register
+  // itself at the steps that chain words.
+  reg bfd_q, binv_q, cin_q, csel_q;
+  always @(posedge clk) begin
+    bfd_q  <= 1'b0;
+    binv_q <= 1'b0;
+    cin_q  <= 1'b0;
+    csel_q <= 1'b0;
+    case (st)
+      ST_IDLE: begin
+        binv_q <= 1'b1;
+        cin_q  <= 1'b1;
+      end
+      ST_LOAD: bfd_q <= !(ld && ridx == I_LAST);
+      ST_PREP: cin_q <= sq >= 4'd4 && sq != PREP_LAST && !neg_h[psq];
+      default:
+      case (sq)
+        4'd0: csel_q <= 1'b1;
+        4'd1: begin
+          binv_q <= mxn;
+          cin_q  <= mxn;
+        end
+        4'd2, 4'd3: begin
+          binv_q <= 1'b1;
+          cin_q  <= 1'b1;
+        end
+        4'd4: begin
+          binv_q <= myn;
+          cin_q  <= myn;
+        end
+        4'd5: binv_q <= 1'b1;
+        default: begin
+          if (is_line && sq >= 4'd6 && sq <= 4'd8) begin
+            binv_q <= 1'b1;
+            cin_q  <= 1'b1;
+          end
+          if (is_arc) begin
+            case (sq)
+              4'd6, 4'd9: begin
+                binv_q <= negm;
+                cin_q  <= negm;
+              end
+              4'd7: begin
+                binv_q <= negm;
+                cin_q  <= !negm;
+              end
+              4'd8: begin
+                binv_q <= !outw;
+                cin_q  <= !outw;
+              end
+              4'd10: begin
+                binv_q <= !outw;
+                csel_q <= 1'b1;
+              end
+              default: ;
+            endcase
+          end
+        end
+      endcase
+    endcase
+  end
+  wire bfd = bfd_q;
+  wire binv = binv_q;
+  wire cin = csel_q ? carry : cin_q;
+
+  // The write of this clock: address and mode.
   reg [3:0] wa;
   reg [2:0] wm;
   always @(*) begin
-    bfd  = 1'b0;
-    binv = 1'b0;
-    cin  = 1'b0;
-    wa   = sq;
-    wm   = W_NONE;
+    wa = sq;
+    wm = W_NONE;
     case (st)
       ST_IDLE: begin
         // After reset: the two copies of V1 made equal (whatever the value),
         // then V1 - V1 = 0 into the zero word and the phase.
-        binv = 1'b1;
-        cin  = 1'b1;
-        wa   = ic == 3'd0 ? 4'd1 : (ic == 3'd2 ? 4'd0 : (ic == 3'd3 ? 4'd11 : 4'd12));
-        wm   = (ic != 3'd1 && ic != INIT_STEPS) ? W_BOTH : W_NONE;
+        wa = ic == 3'd0 ? 4'd1 : (ic == 3'd2 ? 4'd0 : (ic == 3'd3 ? 4'd11 : 4'd12));
+        wm = (ic != 3'd1 && ic != INIT_STEPS) ? W_BOTH : W_NONE;
       end
       ST_LOAD: begin
         // V0 + word
-        bfd = 1'b1;
-        wa  = ridx;
-        wm  = (ld && ridx != I_HDR) ? W_BOTH : W_NONE;
+        wa = ridx;
+        wm = (ld && ridx != I_HDR) ? W_BOTH : W_NONE;
       end
       ST_PREP: begin
         wa = sq + 4'd2;
@@ -202,8 +266,7 @@ module interp_core #(
           wa = 4'd14;
           wm = W_BOTH;
         end else begin
-          wm  = is_line ? W_BOTH : W_NONE;
-          cin = sq >= 4'd5 && !neg_h[psq];
+          wm = is_line ? W_BOTH : W_NONE;
         end
       end
       default: begin
@@ -213,36 +276,20 @@ module interp_core #(
             wm = (!hold_i && !abort_i) ? W_BOTH : W_NONE;
           end
           4'd1: begin
-            cin = carry;
-            wa  = 4'd12;
-            wm  = fen ? W_MASK : W_NONE;
+            wa = 4'd12;
+            wm = fen ? W_MASK : W_NONE;
           end
           4'd2: begin
-            binv = mxn;
-            cin  = mxn;
-            wa   = 4'd15;
-            wm   = W_BOTH;
-          end
-          4'd3, 4'd4: begin
-            binv = 1'b1;
-            cin  = 1'b1;
-          end
-          4'd5: begin
-            binv = myn;
-            cin  = myn;
+            wa = 4'd15;
+            wm = W_BOTH;
           end
           4'd6: begin
-            binv = 1'b1;
-            wa   = 4'd1;
-            wm   = go ? W_BOTH : W_NONE;
+            wa = 4'd1;
+            wm = go ? W_BOTH : W_NONE;
           end
           default: begin
             if (is_line) begin
-              if (sq >= 4'd7 && sq <= 4'd9) begin
-                binv = 1'b1;
-                cin  = 1'b1;
-                wm   = go ? W_BOTH : W_NONE;
-              end
+              if (sq >= 4'd7 && sq <= 4'd9) wm = go ? W_BOTH : W_NONE;
               if (sq >= 4'd10 && sq <= 4'd12) begin
                 wa = sq - 4'd3;
                 wm = (go && lmv[lax]) ? W_BOTH : W_NONE;
@@ -251,28 +298,20 @@ module interp_core #(
             if (is_arc) begin
               case (sq)
                 4'd7, 4'd10: begin
-                  binv = negm;
-                  cin  = negm;
-                  wa   = 4'd8;
-                  wm   = go ? W_BOTH : W_NONE;
+                  wa = 4'd8;
+                  wm = go ? W_BOTH : W_NONE;
                 end
                 4'd8: begin
-                  binv = negm;
-                  cin  = !negm;
-                  wa   = c_addr;
-                  wm   = go ? W_BOTH : W_NONE;
+                  wa = c_addr;
+                  wm = go ? W_BOTH : W_NONE;
                 end
                 4'd9: begin
-                  binv = !outw;
-                  cin  = !outw;
-                  wa   = 4'd2;
-                  wm   = go ? W_BOTH : W_NONE;
+                  wa = 4'd2;
+                  wm = go ? W_BOTH : W_NONE;
                 end
                 4'd11: begin
-                  binv = !outw;
-                  cin  = carry;
-                  wa   = 4'd3;
-                  wm   = go ? W_LO : W_NONE;
+                  wa = 4'd3;
+                  wm = go ? W_LO : W_NONE;
                 end
                 default: ;
               endcase
