@@ -4,6 +4,7 @@
 // MOTIONCTL_PATH is defined by the test target.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -32,27 +33,36 @@ inline std::string slurp(std::FILE* f) {
   return s;
 }
 
-// No shell in between: arguments reach the program exactly as written here.
-// Output goes to temporary files, so a chatty child cannot fill a pipe and block.
-inline Result run(const std::vector<std::string>& args) {
-  using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
-  File out(std::tmpfile(), &std::fclose), err(std::tmpfile(), &std::fclose);
-  if (!out || !err) throw std::runtime_error("tmpfile failed");
+// Starts motionctl with args, no shell in between: arguments reach the
+// program exactly as written here. stdout goes to out_fd (-1: inherited),
+// stderr to err_fd (-1: /dev/null).
+inline pid_t spawn(const std::vector<std::string>& args, int out_fd, int err_fd = -1) {
   std::vector<std::string> storage{MOTIONCTL_PATH};
   storage.insert(storage.end(), args.begin(), args.end());
   std::vector<char*> argv;
   argv.reserve(storage.size() + 1);
   for (auto& s : storage) argv.push_back(s.data());
   argv.push_back(nullptr);
-
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_adddup2(&fa, fileno(out.get()), 1);
-  posix_spawn_file_actions_adddup2(&fa, fileno(err.get()), 2);
+  if (out_fd >= 0) posix_spawn_file_actions_adddup2(&fa, out_fd, 1);
+  if (err_fd >= 0)
+    posix_spawn_file_actions_adddup2(&fa, err_fd, 2);
+  else
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
   pid_t pid = 0;
   const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0) throw std::runtime_error("posix_spawn " + storage[0] + " failed");
+  return pid;
+}
+
+// Output goes to temporary files, so a chatty child cannot fill a pipe and block.
+inline Result run(const std::vector<std::string>& args) {
+  using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+  File out(std::tmpfile(), &std::fclose), err(std::tmpfile(), &std::fclose);
+  if (!out || !err) throw std::runtime_error("tmpfile failed");
+  const pid_t pid = spawn(args, fileno(out.get()), fileno(err.get()));
   int status = 0;
   if (waitpid(pid, &status, 0) != pid) throw std::runtime_error("waitpid failed");
   Result r;

@@ -1,6 +1,6 @@
 // The virtual board for CLI tests: a private runtime directory (so --sim
 // finds only the test's own server) and `motionctl sim serve --fast` as a
-// process of its own. Include after cli_run.hpp (MOTIONCTL_PATH, run()).
+// process of its own.
 #pragma once
 
 #include <fcntl.h>
@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "cli_run.hpp"
 
 namespace mc::test {
 
@@ -36,24 +38,6 @@ class PrivateRuntimeDir {
  private:
   std::string dir_;
 };
-
-inline pid_t spawn(const std::vector<std::string>& args, int out_fd) {
-  std::vector<std::string> storage{MOTIONCTL_PATH};
-  storage.insert(storage.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  argv.reserve(storage.size() + 1);
-  for (auto& s : storage) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  if (out_fd >= 0) posix_spawn_file_actions_adddup2(&fa, out_fd, 1);
-  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("posix_spawn failed");
-  return pid;
-}
 
 // `motionctl sim serve --fast` in its own process; the PTY path from its first line.
 class Server {
