@@ -133,7 +133,7 @@ constexpr int IS_BUSY = 16;
 constexpr int IS_UNDERRUN = 17;
 constexpr int IS_OVF = 18;
 // HW_CFG, AX_ENC_CFG
-constexpr int E_FILT_LSB = 0;  // 8 bits, clocks
+constexpr int E_FILT_LSB = 0;  // 8 bits, clocks; the board filters at most 15 (mc_board FILT_W)
 constexpr int E_DIR_INV = 8;
 constexpr int E_IDX_CLR_EN = 9;
 // AX_IDX writes
@@ -205,11 +205,11 @@ constexpr std::array<RegDef, 31> REGS = {{
     {"IP_SET_Y", reg::IP_SET_Y, false, Access::RW, "position IP_CTRL.set loads, counts"},
     {"IP_SET_Z", reg::IP_SET_Z, false, Access::RW, "position IP_CTRL.set loads, counts"},
     {"HW_POS", reg::HW_POS, false, Access::RWL, "handwheel position, counts; write loads"},
-    {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks, [8] reverse"},
+    {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks (above 15: 15), [8] reverse"},
     {"TLM_HDR", reg::TLM_HDR, false, Access::R, "[15:0] PID sample count, [31:16] FAULT"},
     {"POS", reg::AX_POS, true, Access::RWL,
      "encoder position at the last sample, counts; write loads the counter"},
-    {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW, "[7:0] filter clocks, [8] reverse, [9] index clears"},
+    {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW, "[7:0] filter clocks (above 15: 15), [8] reverse, [9] index clears"},
     {"IDX", reg::AX_IDX, true, Access::RWL, "index position latched, counts; write [0] arm, [1] disarm"},
     {"ENC_STAT", reg::AX_ENC_STAT, true, Access::RWL,
      "[15:0] encoder errors, [16] error, [17] index armed, [18] index seen; write [0] clears errors"},

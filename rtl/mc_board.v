@@ -16,7 +16,7 @@ module mc_board #(
     parameter integer NAXES    = 3,           // axes (1..3)
     parameter integer FIFO_AW  = 9,           // segment queue, log2 words
     parameter integer PWM_BITS = 9,           // PWM period 2^PWM_BITS clocks
-    parameter integer FILT_W   = 8,           // encoder filter length bits
+    parameter integer FILT_W   = 4,           // encoder filter length bits: up to 15 clocks (1.25 us)
     parameter integer CLK_HZ   = 12_000_000,  // clock, Hz
     parameter integer BAUD     = 1_000_000,   // UART rate, bit/s
     parameter integer HANDWHEEL = 1           // 1: build the handwheel decoder, 0: HW_POS reads 0

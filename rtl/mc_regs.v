@@ -28,7 +28,7 @@
 module mc_regs #(
     parameter integer NAXES   = 3,           // axes (1..3)
     parameter integer FIFO_AW = 9,           // interpolator queue, log2 words
-    parameter integer FILT_W  = 8,           // encoder filter length bits
+    parameter integer FILT_W  = 8,           // encoder filter length bits (the field is 8; longer values clamp)
     parameter integer CLK_HZ  = 12_000_000,  // clock, Hz
     parameter integer BAUD    = 1_000_000    // UART rate, bit/s
 ) (
@@ -326,6 +326,14 @@ module mc_regs #(
   assign pid_re_o    = xs == X_PIDR;
   assign pid_raddr_o = addr[7:0];
   assign enc_pos_load_val_o = {NAXES{data}};
+
+  // The filter-length field is 8 bits in the register map whatever the
+  // decoders are built with: a longer value than FILT_W bits hold becomes
+  // the longest filter, never a short one by truncation.
+  wire [7:0] filt_field = data[B_E_FILT_LSB+:8];
+  /* verilator lint_off WIDTH */
+  wire [FILT_W-1:0] filt_len = (filt_field >> FILT_W) != 8'd0 ? {FILT_W{1'b1}} : filt_field[FILT_W-1:0];
+  /* verilator lint_on WIDTH */
   assign hw_load_val_o = data;
 
   // The checks of a frame that need no payload.
@@ -401,7 +409,7 @@ module mc_regs #(
           R_IP_SET_Z[4:0]: ip_set_pos_o[95:64] <= data;
           R_HW_POS[4:0]: hw_load_o <= 1'b1;
           R_HW_CFG[4:0]: begin
-            hw_filt_o    <= data[B_E_FILT_LSB+:FILT_W];
+            hw_filt_o    <= filt_len;
             hw_dir_inv_o <= data[B_E_DIR_INV];
           end
           default: ;
@@ -412,7 +420,7 @@ module mc_regs #(
           case (addr[3:0])
             R_AX_POS: enc_pos_load_o[ax] <= 1'b1;
             R_AX_ENC_CFG: begin
-              enc_filt_o[ax*FILT_W+:FILT_W] <= data[B_E_FILT_LSB+:FILT_W];
+              enc_filt_o[ax*FILT_W+:FILT_W] <= filt_len;
               enc_dir_inv_o[ax]    <= data[B_E_DIR_INV];
               enc_idx_clr_en_o[ax] <= data[B_E_IDX_CLR_EN];
             end

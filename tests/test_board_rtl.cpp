@@ -286,6 +286,33 @@ TEST(BoardRtl, EveryFaultSourceLatchesAndClears) {
   EXPECT_EQ(tb.read(br::FAULT), 0u);
 }
 
+// The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads
+// back as written and acts as 15, never as its low bits (16 would be 0).
+// Seen through the index latch: a Z pulse arms nothing unless it passes.
+TEST(BoardRtl, EncoderFilterLengthClampsToTheLongestBuilt) {
+  BoardTb tb;
+  auto& p = tb.pins();
+  auto z_pulse_seen = [&](int clocks) {
+    tb.write(ax(0, br::AX_IDX), 1u << bb::X_ARM);
+    p.X_ENC_Z = 1;
+    tb.run(clocks);
+    p.X_ENC_Z = 0;
+    tb.run(40);
+    const uint32_t st = tb.read(ax(0, br::AX_ENC_STAT));
+    EXPECT_EQ((st >> bb::ES_IDX_ARMED) & 1, (st >> bb::ES_IDX_SEEN) & 1 ? 0u : 1u);
+    return ((st >> bb::ES_IDX_SEEN) & 1) != 0;
+  };
+  for (uint32_t len : {15u, 16u, 200u, 255u}) {
+    tb.write(ax(0, br::AX_ENC_CFG), len);
+    EXPECT_EQ(tb.read(ax(0, br::AX_ENC_CFG)), len);
+    EXPECT_FALSE(z_pulse_seen(14)) << "filter " << len;
+    EXPECT_TRUE(z_pulse_seen(15)) << "filter " << len;
+  }
+  tb.write(ax(0, br::AX_ENC_CFG), 13);
+  EXPECT_FALSE(z_pulse_seen(12));
+  EXPECT_TRUE(z_pulse_seen(13));
+}
+
 // Telemetry every sample, compared with the PID twin fed the sampled command
 // and feedback; the command comes from segments the host planned and queued,
 // run end to end through the interpolator.
