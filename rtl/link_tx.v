@@ -3,7 +3,9 @@
 // writes (we_i, waddr_i, wdata_i). Strobe start_i while busy_o is low with
 // the header fields: the frame is SYNC, LEN, SEQ, CMD, then (status_en_i) the
 // status byte, then nwords_i words from address wbase_i, little-endian, then
-// the CRC-16. The words must stay unchanged until busy_o falls.
+// the CRC-16. The words and the header fields (all inputs but start_i) must
+// stay unchanged until busy_o falls: the frame reads them as it goes, which
+// spares a copy of each.
 `default_nettype none
 
 module link_tx (
@@ -48,8 +50,7 @@ module link_tx (
   reg  [1:0] hb;  // header byte, and byte within a word
   reg  [3:0] wleft;  // words left after the current one
   reg        hold;  // the byte just handed over has not left uart_tx's ready yet, or q is not fresh
-  reg  [7:0] seq, cmd, status, len;
-  reg        stat_en;
+  wire [7:0] len = {2'd0, nwords_i, 2'd0} + {7'd0, status_en_i};
   wire [15:0] crc;
   wire        crc_busy;
 
@@ -59,8 +60,8 @@ module link_tx (
   reg  [7:0] nb;
   always @(*) begin
     case (st)
-      S_HDR:   nb = (hb == 2'd0) ? P_SYNC : (hb == 2'd1) ? len : (hb == 2'd2) ? seq : cmd;
-      S_STAT:  nb = status;
+      S_HDR:   nb = (hb == 2'd0) ? P_SYNC : (hb == 2'd1) ? len : (hb == 2'd2) ? seq_i : cmd_i;
+      S_STAT:  nb = status_i;
       S_DATA:  nb = q[hb*8+:8];
       S_CRC0:  nb = crc[7:0];
       default: nb = crc[15:8];
@@ -86,11 +87,6 @@ module link_tx (
       if (start_i) begin
         st      <= S_HDR;
         hb      <= 2'd0;
-        seq     <= seq_i;
-        cmd     <= cmd_i;
-        status  <= status_i;
-        stat_en <= status_en_i;
-        len     <= {2'd0, nwords_i, 2'd0} + {7'd0, status_en_i};
         ra      <= wbase_i;
         wleft   <= nwords_i - 4'd1;
       end
@@ -104,7 +100,7 @@ module link_tx (
         S_HDR:
         if (hb == 2'd3) begin
           hb <= 2'd0;
-          st <= stat_en ? S_STAT : (len == 8'd0 ? S_CRC0 : S_DATA);
+          st <= status_en_i ? S_STAT : (len == 8'd0 ? S_CRC0 : S_DATA);
         end
         S_STAT: begin
           hb <= 2'd0;

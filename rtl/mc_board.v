@@ -135,7 +135,7 @@ module mc_board #(
   wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_pos_load, enc_idx_arm, enc_idx_disarm, enc_err_clr;
   wire [       NAXES-1:0] enc_err, enc_idx_armed, enc_idx_seen;
   wire [    NAXES*32-1:0] enc_pos_load_val, enc_idx_pos;
-  wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_u, smp_u;
+  wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_sel, smp_u;
   wire [       NAXES-1:0] drv_ovr, smp_sat, pid_en;
   wire [             3:0] smp_raddr;
   wire [            31:0] smp_rdata;
@@ -221,7 +221,7 @@ module mc_board #(
       .drv_ovr_o         (drv_ovr),
       .drv_ovr_val_o     (drv_ovr_val),
       .drv_en_i          (drv_en_o),
-      .drv_u_i           (drv_u),
+      .drv_sel_i         (drv_sel),
       .done_i            (done),
       .smp_raddr_o       (smp_raddr),
       .smp_rdata_i       (smp_rdata),
@@ -259,10 +259,12 @@ module mc_board #(
   );
 
   // Unused datapath outputs: synthesis removes the logic behind them (the
-  // decoders' velocity, the live positions; the link reads the sampled ones).
+  // decoders' velocity, the live positions; the link reads the sampled ones;
+  // the registered drive value, as the register file registers drv_sel).
   /* verilator lint_off UNUSEDSIGNAL */
   wire                tick;
   wire [NAXES*32-1:0] enc_vel, pos_live, cmd_live;
+  wire [NAXES*16-1:0] drv_u;
   /* verilator lint_on UNUSEDSIGNAL */
   motion_core #(
       .NAXES   (NAXES),
@@ -317,6 +319,7 @@ module mc_board #(
       .dir_o           (dir_o),
       .drv_en_o        (drv_en_o),
       .drv_u           (drv_u),
+      .drv_sel         (drv_sel),
       .tick            (tick),
       .done            (done),
       .smp_raddr       (smp_raddr),

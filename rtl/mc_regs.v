@@ -110,7 +110,7 @@ module mc_regs #(
     output reg  [       NAXES-1:0] drv_ovr_o,
     output reg  [    NAXES*16-1:0] drv_ovr_val_o,
     input  wire [       NAXES-1:0] drv_en_i,
-    input  wire [    NAXES*16-1:0] drv_u_i,
+    input  wire [    NAXES*16-1:0] drv_sel_i,  // registered here (q): the value the pins show
     // motion_core: per-sample values
     input  wire                    done_i,
     output wire [             3:0] smp_raddr_o,  // motion_core's sample RAM: {axis, field}
@@ -203,7 +203,7 @@ module mc_regs #(
   wire [127:0] p_idx = {{(PADN * 32) {1'b0}}, enc_idx_pos_i};
   wire [63:0] p_ecnt = {{(PADN * 16) {1'b0}}, enc_err_cnt_i};
   wire [63:0] p_u = {{(PADN * 16) {1'b0}}, smp_u_i};
-  wire [63:0] p_du = {{(PADN * 16) {1'b0}}, drv_u_i};
+  wire [63:0] p_du = {{(PADN * 16) {1'b0}}, drv_sel_i};
   wire [3:0] p_seen = {{PADN{1'b0}}, enc_idx_seen_i};
   wire [3:0] p_armd = {{PADN{1'b0}}, enc_idx_armed_i};
   wire [3:0] p_eerr = {{PADN{1'b0}}, enc_err_i};

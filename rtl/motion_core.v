@@ -27,6 +27,10 @@
 //   drv_u in steps of 2^(15-PWM_BITS) drive units, so full scale is always
 //   on; dir_o gives the sign. drv_en_o enables the bridge for an axis whose
 //   PID is enabled or that is overridden, and is allowed.
+// - drv_sel is the drive value selected in this clock, drv_u the one the
+//   pins show (drv_sel of the clock before). A user that registers its read
+//   of drv_sel anyway (the board's register file) sees drv_u's value and
+//   leaves drv_u's flip-flops to be trimmed.
 `default_nettype none
 
 module motion_core #(
@@ -90,7 +94,8 @@ module motion_core #(
     output reg  [     NAXES-1:0] pwm_o,
     output reg  [     NAXES-1:0] dir_o,
     output reg  [     NAXES-1:0] drv_en_o,
-    output reg  [  NAXES*16-1:0] drv_u,
+    output reg  [  NAXES*16-1:0] drv_u,    // the drive value behind pwm_o/dir_o
+    output wire [  NAXES*16-1:0] drv_sel,  // drv_u's next value (this clock's selection)
     // per-sample telemetry
     output wire                  tick,
     output wire                  done,
@@ -269,6 +274,7 @@ module motion_core #(
       wire        [15:0] u_mag = u_sel[15] ? 16'd0 - u_sel : u_sel;
       wire        [15:0] duty = u_mag >> (15 - PWM_BITS);
       wire        [15:0] pcnt_w = {{(16 - PWM_BITS) {1'b0}}, pcnt};
+      assign drv_sel[g*16+:16] = u_sel;
       always @(posedge clk) begin
         if (rst) begin
           drv_u[g*16+:16] <= 16'd0;

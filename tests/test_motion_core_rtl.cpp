@@ -49,6 +49,13 @@ class MotionCosim {
     dut_->eval();
     const typename Twin::Out t = twin_.outputs(in_.pid_we);
     compare(t);
+    // drv_sel (no twin output: it depends on this clock's inputs) is the
+    // value drv_u takes at the edge, unless reset clears it.
+    for (int a = 0; a < N; ++a) {
+      const auto u = int16_t(vl::get_bits(dut_->drv_u, 16 * a, 16));
+      if (cycles_ > 0) check("drv_u against the last drv_sel", a, u, drv_sel_[a]);
+      drv_sel_[a] = in_.rst ? int16_t(0) : int16_t(vl::get_bits(dut_->drv_sel, 16 * a, 16));
+    }
     motor(t);
     twin_.clock(in_);
     dut_->clk = 1;
@@ -130,6 +137,7 @@ class MotionCosim {
   std::unique_ptr<Model> dut_;
   Twin twin_;
   int64_t acc_[N] = {};
+  int16_t drv_sel_[N] = {};
   int mismatches_ = 0;
 };
 
