@@ -17,8 +17,8 @@
 //   was not marked last, underrun() is set: the position holds (it never
 //   jumps) and motion resumes when segments arrive.
 // - hold pauses the feed (feed hold); abort stops at once and empties the
-//   queue; set loads the position, taken only while idle; clr clears the
-//   sticky flags.
+//   queue; set loads the position of the axes it names, taken only while
+//   idle; clr clears the sticky flags.
 //
 // Structure: a serial engine. One 32-bit ALU, out = A + (B ^ inv) + cin, with
 // A from read port a and B from read port b or the FIFO word, runs a fixed
@@ -74,7 +74,7 @@ struct InterpIn {
   bool abort = false;
   bool hold = false;
   bool clr = false;
-  bool set = false;
+  uint8_t set = 0;  // a strobe per axis: bit a loads set_pos[a]
   int32_t set_pos[3] = {};
 };
 
@@ -271,7 +271,8 @@ class InterpCore {
     switch (st_) {
       case ST_IDLE:
         if (in.set) {
-          for (int ax = 0; ax < 3; ++ax) pos_[ax] = in.set_pos[ax];
+          for (int ax = 0; ax < 3; ++ax)
+            if (in.set >> ax & 1) pos_[ax] = in.set_pos[ax];
         } else if (ic_ == INIT_STEPS && count >= seg::SEG_WORDS) {
           st_ = ST_LOAD;
           widx_ = 0;

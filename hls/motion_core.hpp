@@ -28,7 +28,8 @@ struct MotionIn {
   // interpolator
   bool seg_wr = false;
   uint32_t seg_wdata = 0;
-  bool ip_abort = false, ip_hold = false, ip_clr = false, ip_set = false;
+  bool ip_abort = false, ip_hold = false, ip_clr = false;
+  uint8_t ip_set = 0;  // a strobe per axis
   int32_t ip_set_pos[3] = {};
   // encoders
   bool enc_a[NAXES] = {}, enc_b[NAXES] = {}, enc_z[NAXES] = {};

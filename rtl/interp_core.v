@@ -18,8 +18,10 @@
 //   marked last, sets underrun_o: the position holds, never jumps, and
 //   motion resumes when segments arrive.
 // - hold_i pauses the feed; abort_i stops at once and empties the queue;
-//   set_i loads pos_o from set_pos_i and is taken only while idle (busy_o
-//   low); clr_i clears the sticky flags (an event in the same cycle wins).
+//   set_i[a] loads axis a of pos_o from its slice of set_pos_i and is taken
+//   only while idle (busy_o low): a loader may set the axes one at a time
+//   from one 32-bit value (the board does); clr_i clears the sticky flags
+//   (an event in the same cycle wins).
 //
 // Structure: a serial engine, like pid_core. One 32-bit ALU,
 // out = A + (B ^ inv) + cin with A from read port a and B from read port b
@@ -45,7 +47,7 @@ module interp_core #(
     input  wire                abort_i,
     input  wire                hold_i,
     input  wire                clr_i,
-    input  wire                set_i,
+    input  wire [         2:0] set_i,      // one strobe per axis: x, y, z
     input  wire [    3*32-1:0] set_pos_i,
     // position command, counts: x in [31:0], y, z
     output wire [    3*32-1:0] pos_o,
@@ -495,7 +497,7 @@ module interp_core #(
       if (clr_i) underrun_o <= 1'b0;
       case (st)
         ST_IDLE: begin
-          if (!set_i && ic == INIT_STEPS && count_o >= SEGW) begin
+          if (set_i == 3'b000 && ic == INIT_STEPS && count_o >= SEGW) begin
             st   <= ST_LOAD;
             widx <= 4'd0;
           end
@@ -551,7 +553,7 @@ module interp_core #(
       wire        step = mv[g] && !(p[31] == neg[g] && p_n[31] != neg[g]);
       always @(posedge clk) begin
         if (rst) p <= 32'd0;
-        else if (st == ST_IDLE && set_i) p <= set_pos_i[g*32+:32];
+        else if (st == ST_IDLE && set_i[g]) p <= set_pos_i[g*32+:32];
         else if (step) p <= p_n;
       end
       assign pos_o[g*32+:32] = p;

@@ -127,9 +127,10 @@ module mc_board #(
   wire                    pid_we, pid_wready, pid_re, pid_rready, pid_rvalid;
   wire [             7:0] pid_waddr, pid_raddr;
   wire [            31:0] pid_wdata, pid_rdata, seg_wdata;
-  wire                    seg_wr, ip_abort, ip_hold, ip_clr, ip_set, ip_busy, ip_underrun, ip_ovf;
+  wire                    seg_wr, ip_abort, ip_hold, ip_clr, ip_busy, ip_underrun, ip_ovf;
+  wire [             2:0] ip_set;
   wire [       FIFO_AW:0] seg_count;
-  wire [          3*32-1:0] ip_set_pos;
+  wire [            31:0] ip_set_val;
   wire [            15:0] ip_seg_cnt;
   wire [NAXES*FILT_W-1:0] enc_filt;
   wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_pos_load, enc_idx_arm, enc_idx_disarm, enc_err_clr;
@@ -200,7 +201,7 @@ module mc_board #(
       .ip_hold_o         (ip_hold),
       .ip_clr_o          (ip_clr),
       .ip_set_o          (ip_set),
-      .ip_set_pos_o      (ip_set_pos),
+      .ip_set_val_o      (ip_set_val),
       .ip_busy_i         (ip_busy),
       .ip_underrun_i     (ip_underrun),
       .ip_ovf_i          (ip_ovf),
@@ -290,7 +291,7 @@ module mc_board #(
       .ip_hold         (ip_hold | ~armed),
       .ip_clr          (ip_clr),
       .ip_set          (ip_set),
-      .ip_set_pos      (ip_set_pos),
+      .ip_set_pos      ({3{ip_set_val}}),  // one value, an axis at a time
       .ip_busy         (ip_busy),
       .ip_underrun     (ip_underrun),
       .ip_ovf          (ip_ovf),

@@ -86,8 +86,8 @@ module mc_regs #(
     output reg                     ip_abort_o,
     output reg                     ip_hold_o,
     output reg                     ip_clr_o,
-    output reg                     ip_set_o,
-    output reg  [          3*32-1:0] ip_set_pos_o,
+    output wire [             2:0] ip_set_o,      // per axis, one clock each, x then y then z
+    output wire [            31:0] ip_set_val_o,  // the position for the axis ip_set_o names
     input  wire                    ip_busy_i,
     input  wire                    ip_underrun_i,
     input  wire                    ip_ovf_i,
@@ -299,7 +299,7 @@ module mc_regs #(
   // Command executor.
   localparam [3:0] X_IDLE = 4'd0, X_CHECK = 4'd1, X_FETCH = 4'd2, X_DECIDE = 4'd3, X_APPLY = 4'd4;
   localparam [3:0] X_PIDW = 4'd5, X_PIDR = 4'd6, X_PIDRW = 4'd7, X_RD = 4'd8, X_RD1 = 4'd9, X_RD2 = 4'd10;
-  localparam [3:0] X_REPLY = 4'd11;
+  localparam [3:0] X_REPLY = 4'd11, X_SET = 4'd12;
   reg  [3:0] xs;
   reg  [7:0] f_seq, f_cmd, f_len, status;
   reg  [7:0] bi, rbi;  // payload byte read, byte arriving
@@ -312,6 +312,7 @@ module mc_regs #(
   reg        val_shadow;  // the reply value comes from sq, not q
   reg  [31:0] val;  // reply value when it comes from neither (writes, PID reads)
   reg        val_direct;
+  reg  [1:0] set_n;  // X_SET: the axis whose position is read next
   wire       rep_busy = rep_pend | rep_sending;
   wire       dup = last_valid && f_seq == last_seq;
   wire [FIFO_AW+1:0] room_need = {{(FIFO_AW - 4) {1'b0}}, f_len[7:2]} + {1'b0, seg_count_i};
@@ -369,7 +370,6 @@ module mc_regs #(
     fclr_o           <= 16'd0;
     ip_abort_o       <= 1'b0;
     ip_clr_o         <= 1'b0;
-    ip_set_o         <= 1'b0;
     hw_load_o        <= 1'b0;
     enc_pos_load_o   <= {NAXES{1'b0}};
     enc_idx_arm_o    <= {NAXES{1'b0}};
@@ -402,11 +402,7 @@ module mc_regs #(
           R_IP_CTRL[4:0]: begin
             ip_abort_o <= data[B_I_ABORT];
             ip_clr_o   <= data[B_I_CLR];
-            ip_set_o   <= data[B_I_SET];
           end
-          R_IP_SET_X[4:0]: ip_set_pos_o[31:0] <= data;
-          R_IP_SET_Y[4:0]: ip_set_pos_o[63:32] <= data;
-          R_IP_SET_Z[4:0]: ip_set_pos_o[95:64] <= data;
           R_HW_POS[4:0]: hw_load_o <= 1'b1;
           R_HW_CFG[4:0]: begin
             hw_filt_o    <= filt_len;
@@ -532,7 +528,23 @@ module mc_regs #(
             end
           end
         end
-        X_APPLY: xs <= X_REPLY;
+        // IP_CTRL.set: the positions wait in the shadow RAM (IP_SET_X..Z);
+        // X_SET reads them in turn and each strobes its axis as it arrives.
+        X_APPLY: begin
+          if (w_glb && addr[4:0] == R_IP_CTRL[4:0] && data[B_I_SET]) begin
+            addr  <= R_IP_SET_X;
+            set_n <= 2'd0;
+            xs    <= X_SET;
+          end else begin
+            xs <= X_REPLY;
+          end
+        end
+        X_SET:
+        if (rd_free) begin
+          addr  <= addr + 16'd1;
+          set_n <= set_n + 2'd1;
+          if (set_n == 2'd2) xs <= X_REPLY;
+        end
         X_PIDW: if (pid_wready_i) xs <= X_REPLY;
         X_PIDR: if (pid_rready_i) xs <= X_PIDRW;
         X_PIDRW:
@@ -551,6 +563,20 @@ module mc_regs #(
       endcase
     end
   end
+
+  // The IP_SET reads follow the shadow RAM's two clocks: {valid, axis}.
+  reg [2:0] set_t1, set_t2;
+  always @(posedge clk) begin
+    if (rst) begin
+      set_t1 <= 3'd0;
+      set_t2 <= 3'd0;
+    end else begin
+      set_t1 <= {xs == X_SET && rd_free, set_n};
+      set_t2 <= set_t1;
+    end
+  end
+  assign ip_set_o     = {3{set_t2[2]}} & (3'd1 << set_t2[1:0]);
+  assign ip_set_val_o = sq;
 
   // link_tx's RAM: the walker's telemetry words, or the reply's value. In
   // X_RD2 the walker cannot be writing (it was idle when X_RD issued, and

@@ -8,7 +8,7 @@
 // - Configure the PID through pid_* (pid_core's port, rtl/pid_regs.vh), the
 //   decoders through enc_* (quad_decoder's ports, one slice per axis), and
 //   queue segments through seg_wr/seg_wdata (interp_core's port; set the
-//   position with ip_set while the interpolator is idle).
+//   position with ip_set, a strobe per axis, while the interpolator is idle).
 // - The PID samples cmd/pos at tick, for all axes at once, and the decoders
 //   take their velocity sample at the same tick. When the sweep ends (done),
 //   the sample's outputs are latched together into smp_u/smp_sat and reach
@@ -60,7 +60,7 @@ module motion_core #(
     input  wire                  ip_abort,
     input  wire                  ip_hold,
     input  wire                  ip_clr,
-    input  wire                  ip_set,
+    input  wire [           2:0] ip_set,
     input  wire [      3*32-1:0] ip_set_pos,
     output wire                  ip_busy,
     output wire                  ip_underrun,

@@ -366,7 +366,7 @@ class Machine {
 
   void start_command(CoreIn& in, uint32_t c) {
     if (step_ != start_step_) return;
-    in.ip_set = cmd_.set && c == 0;
+    in.ip_set = cmd_.set && c == 0 ? 7 : 0;
     for (int a = 0; a < 3; ++a) in.ip_set_pos[a] = cmd_.set_pos[a];
     in.seg_wr = c < cmd_.words.size();
     in.seg_wdata = in.seg_wr ? cmd_.words[c] : 0;
@@ -413,7 +413,8 @@ class Machine {
       }
       ++c;
     }
-    in_.ip_set = in_.seg_wr = false;
+    in_.ip_set = 0;
+    in_.seg_wr = false;
     for (int a = 0; a < kCoreAxes; ++a) volts[a] = sum[a] / k_;
   }
 
@@ -440,7 +441,7 @@ class Machine {
     for (uint32_t c = 0; c < k_; ++c) {
       mc::InterpIn in;
       if (step_ == start_step_) {
-        in.set = cmd_.set && c == 0;
+        in.set = cmd_.set && c == 0 ? 7 : 0;
         for (int a = 0; a < 3; ++a) in.set_pos[a] = cmd_.set_pos[a];
         in.wr = c < cmd_.words.size();
         in.wdata = in.wr ? cmd_.words[c] : 0;

@@ -286,6 +286,25 @@ TEST(BoardRtl, EveryFaultSourceLatchesAndClears) {
   EXPECT_EQ(tb.read(br::FAULT), 0u);
 }
 
+// IP_CTRL.set loads every axis's command from IP_SET_X..Z (read from the
+// register file's RAM one axis at a time); a write of IP_SET alone moves
+// nothing.
+TEST(BoardRtl, IpSetLoadsEachAxisCommand) {
+  BoardTb tb;
+  const int32_t v[3] = {123456, -7, int32_t(0x80000001u)};
+  for (int a = 0; a < 3; ++a) tb.write(uint16_t(br::IP_SET_X + a), uint32_t(v[a]));
+  tb.run(200);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(tb.read(ax(a, br::AX_CMD)), 0u) << a;
+  tb.write(br::IP_CTRL, 1u << bb::I_SET);
+  tb.run(200);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), v[a]) << a;
+  // Again with new values, and clear in the same write.
+  for (int a = 0; a < 3; ++a) tb.write(uint16_t(br::IP_SET_X + a), uint32_t(-v[a] / 2));
+  tb.write(br::IP_CTRL, 1u << bb::I_SET | 1u << bb::I_CLR);
+  tb.run(200);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), -v[a] / 2) << a;
+}
+
 // The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads
 // back as written and acts as 15, never as its low bits (16 would be 0).
 // Seen through the index latch: a Z pulse arms nothing unless it passes.

@@ -141,7 +141,7 @@ struct Rig {
   }
   void set(const Vec3& p) {
     InterpIn in;
-    in.set = true;
+    in.set = 7;
     for (int a = 0; a < 3; ++a) in.set_pos[a] = int32_t(p[size_t(a)]);
     clock(in);
   }
@@ -233,7 +233,7 @@ TEST(InterpRtl, MalformedWordsAndRandomControlStayBitExact) {
       in.abort = e < 3;
       in.hold = e >= 3 && e < 50;
       in.clr = e >= 50 && e < 60;
-      in.set = e >= 60 && e < 65;
+      in.set = e >= 60 && e < 65 ? uint8_t(rng() % 8) : 0;
       for (int a = 0; a < 3; ++a) in.set_pos[a] = int32_t(rng());
       if (r(5) == 0) {
         in.wr = true;  // a stray word: misaligns the writer until an abort

@@ -288,7 +288,7 @@ TEST(InterpCoreTwin, LineRateIsExactWithNoDrift) {
 // by the cycle twin, from the clock at which each point was reached.
 double arc_speed_error(const PlannedSegment& p, int64_t r, double feed, double* total_s) {
   TwinRig rig;
-  rig.in.set = true;
+  rig.in.set = 7;
   rig.in.set_pos[0] = int32_t(r);
   rig.clock();
   rig.push(p, nullptr);
@@ -414,7 +414,7 @@ TEST(InterpCoreTwin, HoldAbortAndSet) {
   }
   EXPECT_EQ(rig.pos(), mid);  // feed hold: not one count more
   // set is refused while a segment runs...
-  rig.in.set = true;
+  rig.in.set = 7;
   rig.in.set_pos[0] = 77;
   rig.clock();
   EXPECT_NE(rig.pos()[0], 77);
@@ -428,12 +428,22 @@ TEST(InterpCoreTwin, HoldAbortAndSet) {
   EXPECT_EQ(rig.core.count(), 0);
   EXPECT_FALSE(rig.core.busy());
   // ...and set is taken once idle.
-  rig.in.set = true;
+  rig.in.set = 7;
   rig.in.set_pos[0] = -5;
   rig.in.set_pos[1] = 6;
   rig.in.set_pos[2] = 7;
   rig.clock();
   EXPECT_EQ(rig.pos(), (Vec3{-5, 6, 7}));
+  // Each strobe bit loads its own axis only, as the board loads them one at
+  // a time from one register value.
+  for (int a = 0; a < 3; ++a) {
+    rig.in.set = uint8_t(1u << a);
+    rig.in.set_pos[0] = rig.in.set_pos[1] = rig.in.set_pos[2] = 100 + a;
+    rig.clock();
+  }
+  rig.in.set = 0;
+  rig.clock();
+  EXPECT_EQ(rig.pos(), (Vec3{100, 101, 102}));
 }
 
 TEST(InterpCoreTwin, SegmentsRunBackToBackWithoutAStop) {

@@ -206,10 +206,11 @@ void random_run(uint32_t seed, uint64_t cycles) {
     in.ip_hold = rng() % 5000 == 0 ? !in.ip_hold : in.ip_hold;
     in.ip_clr = rng() % 3000 == 0;
     in.ip_abort = false;
-    in.ip_set = rng() % 7000 == 0;
+    in.ip_set = rng() % 7000 == 0 ? uint8_t(1 + rng() % 7) : 0;
     for (int a = 0; a < 3; ++a) in.ip_set_pos[a] = int32_t(rng() % 2000) - 1000;
     if (in.ip_set && !o.ip_busy)
-      for (int a = 0; a < 3; ++a) at[size_t(a)] = in.ip_set_pos[a];
+      for (int a = 0; a < 3; ++a)
+        if (in.ip_set >> a & 1) at[size_t(a)] = in.ip_set_pos[a];
     // Encoders and drive.
     for (int a = 0; a < N; ++a) {
       in.enc_pos_load[a] = rng() % 30000 == 0;
@@ -265,11 +266,11 @@ TEST(MotionCoreRtl, DriveTimingAndDuty) {
   in.pid_we = false;
   in.drv_allow[0] = in.drv_allow[1] = true;
   // Command +1000 on both axes (the motor stays put: no PWM before this).
-  in.ip_set = true;
+  in.ip_set = 7;
   in.ip_set_pos[0] = 1000;
   in.ip_set_pos[1] = -1000;
   s.cycle();
-  in.ip_set = false;
+  in.ip_set = 0;
   while (!s.twin().outputs().tick) s.cycle();
   uint64_t t0 = s.cycles_;
   s.cycle();

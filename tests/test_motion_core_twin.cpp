@@ -66,7 +66,7 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
       if (rng() % 5000 == 0) in.drv_ovr[rng() % 2] ^= true;
       in.drv_ovr_val[0] = int16_t(rng() % 2000);
       if (rng() % 50 == 0) in.smp_raddr = uint8_t(rng() % 16);
-      in.ip_set = step == 2000 || step == 20000;
+      in.ip_set = step == 2000 || step == 20000 ? 7 : 0;
       in.ip_set_pos[0] = int32_t(step) / 10;
       in.ip_set_pos[1] = -int32_t(step) / 10;
       for (int x = 0; x < 2; ++x) {
@@ -100,7 +100,7 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
         expect_same(o, fast.outputs(in.pid_we), clocks);
         ref.clock(in);
         fast.clock(in);
-        in.ip_set = false;
+        in.ip_set = 0;
         ++c;
         ++clocks;
       }
