@@ -82,7 +82,8 @@ constexpr uint16_t AX_ERR = 0x5;
 constexpr uint16_t AX_OUT = 0x6;
 constexpr uint16_t AX_DRV = 0x7;
 constexpr uint16_t AX_FERR = 0x8;
-constexpr uint16_t AX_END = 0x9;  // first unused offset
+constexpr uint16_t AX_FOLLOW = 0x9;
+constexpr uint16_t AX_END = 0xA;  // first unused offset
 
 constexpr uint16_t axis(int a, uint16_t off) {
   return uint16_t(AXIS_BASE + a * AXIS_STRIDE + off);
@@ -176,7 +177,7 @@ struct RegDef {
   const char* doc;
 };
 
-constexpr std::array<RegDef, 31> REGS = {{
+constexpr std::array<RegDef, 32> REGS = {{
     {"ID", reg::ID, false, Access::R, "0x4D43 (\"MC\") << 16 | protocol version"},
     {"INFO", reg::INFO, false, Access::R, "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version"},
     {"CLK_HZ", reg::CLK_HZ, false, Access::R, "clock frequency, Hz"},
@@ -221,6 +222,8 @@ constexpr std::array<RegDef, 31> REGS = {{
     {"DRV", reg::AX_DRV, true, Access::RWL,
      "read: [15:0] drive value applied, [16] override on; write: [15:0] value, [16] override"},
     {"FERR", reg::AX_FERR, true, Access::RW, "following-error limit, counts [15:0] (0 off)"},
+    {"FOLLOW", reg::AX_FOLLOW, true, Access::R,
+     "following error at the last sample, CMD - POS saturated to 32 bits, counts (what FERR checks)"},
 }};
 
 // Telemetry payload: TLM_HDR, then for each axis in TLM.axes (lowest first)

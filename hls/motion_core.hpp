@@ -8,6 +8,8 @@
 // same way, so every output equals the RTL's bit for bit.
 #pragma once
 
+#include <algorithm>
+#include <climits>
 #include <cstdint>
 
 #include "interp_core.hpp"
@@ -42,7 +44,7 @@ struct MotionIn {
   bool drv_allow[NAXES] = {};
   bool drv_ovr[NAXES] = {};
   int16_t drv_ovr_val[NAXES] = {};
-  // sample RAM read: {axis, field}
+  // sample RAM read: axis << 3 | field
   uint8_t smp_raddr = 0;
 };
 
@@ -63,8 +65,11 @@ struct MotionOut {
   int32_t pos[NAXES] = {}, cmd[NAXES] = {};
 };
 
-// Fields of the sample RAM (rtl/motion_core.v): smp_raddr = axis << 2 | field.
-enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2 };
+// Fields of the sample RAM (rtl/motion_core.v): smp_raddr = axis << 3 | field.
+// OUT is {[17] PID enabled, [16] saturated, [15:0] u}; FOLLOW is command -
+// feedback saturated to 32 bits (the error before deadband and clamp).
+enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2, SMP_OUT = 3, SMP_FOLLOW = 4 };
+constexpr int SMP_FIELDS = 8;  // per axis: the address has three field bits
 
 template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8>
 class MotionCore {
@@ -131,13 +136,17 @@ class MotionCore {
     // Sample RAM: the RTL's sweep fills bank !pb word by word; only the
     // published bank pb is ever read, so writing the words at done is the
     // same to every reader. A reset neither swaps nor clears it.
-    n.smp_rdata = uint32_t(r_.bank[r_.pb][in.smp_raddr >> 2 & 3][in.smp_raddr & 3]);
+    n.smp_rdata = read_bank(in.smp_raddr);
     if (!in.rst && done) {
       for (int a = 0; a < NAXES; ++a) {
         int32_t* w = n.bank[!r_.pb][a];
         w[SMP_CMD] = r_.in_cmd[a];
         w[SMP_FB] = r_.in_fb[a];
         w[SMP_ERR] = pid_.core().err(a);
+        w[SMP_OUT] = int32_t(uint32_t(uint16_t(pid_.core().u(a))) | uint32_t(pid_.core().sat(a)) << 16 |
+                             uint32_t(pid_.enabled(a)) << 17);
+        const int64_t follow = int64_t(r_.in_cmd[a]) - r_.in_fb[a];
+        w[SMP_FOLLOW] = int32_t(std::clamp<int64_t>(follow, INT32_MIN, INT32_MAX));
       }
       n.pb = !r_.pb;
     }
@@ -195,7 +204,7 @@ class MotionCore {
   // ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
-    if (r_.smp_rdata != uint32_t(r_.bank[r_.pb][in.smp_raddr >> 2 & 3][in.smp_raddr & 3])) return false;
+    if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     InterpIn ii;
     ii.wr = in.seg_wr;
     ii.abort = in.ip_abort;
@@ -229,6 +238,7 @@ class MotionCore {
  private:
   static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
 
+  uint32_t read_bank(uint8_t raddr) const { return uint32_t(r_.bank[r_.pb][raddr >> 3 & 3][raddr & 7]); }
   int16_t u_sel(const In& in, int a) const {
     return !in.drv_allow[a] ? int16_t(0) : in.drv_ovr[a] ? in.drv_ovr_val[a] : r_.smp_u[a];
   }
@@ -265,7 +275,7 @@ class MotionCore {
 
   struct Regs {
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
-    int32_t bank[2][4][4] = {};  // [bank][axis][field], as the RTL's 32 words
+    int32_t bank[2][4][SMP_FIELDS] = {};  // [bank][axis][field], as the RTL's 64 words
     bool pb = false;
     uint32_t smp_rdata = 0;
     int16_t smp_u[NAXES] = {};

@@ -136,9 +136,9 @@ module mc_board #(
   wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_pos_load, enc_idx_arm, enc_idx_disarm, enc_err_clr;
   wire [       NAXES-1:0] enc_err, enc_idx_armed, enc_idx_seen;
   wire [    NAXES*32-1:0] enc_pos_load_val, enc_idx_pos;
-  wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_sel, smp_u;
-  wire [       NAXES-1:0] drv_ovr, smp_sat, pid_en;
-  wire [             3:0] smp_raddr;
+  wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_sel;
+  wire [       NAXES-1:0] drv_ovr, pid_en;
+  wire [             4:0] smp_raddr;
   wire [            31:0] smp_rdata;
   wire                    done;
   wire [      FILT_W-1:0] hw_filt;
@@ -226,8 +226,6 @@ module mc_board #(
       .done_i            (done),
       .smp_raddr_o       (smp_raddr),
       .smp_rdata_i       (smp_rdata),
-      .smp_u_i           (smp_u),
-      .smp_sat_i         (smp_sat),
       .pid_en_i          (pid_en),
       .hw_filt_o         (hw_filt),
       .hw_dir_inv_o      (hw_dir_inv),
@@ -261,11 +259,13 @@ module mc_board #(
 
   // Unused datapath outputs: synthesis removes the logic behind them (the
   // decoders' velocity, the live positions; the link reads the sampled ones;
-  // the registered drive value, as the register file registers drv_sel).
+  // the registered drive value, as the register file registers drv_sel; the
+  // sample's outputs, which the register file reads from the sample RAM).
   /* verilator lint_off UNUSEDSIGNAL */
   wire                tick;
   wire [NAXES*32-1:0] enc_vel, pos_live, cmd_live;
-  wire [NAXES*16-1:0] drv_u;
+  wire [NAXES*16-1:0] drv_u, smp_u;
+  wire [   NAXES-1:0] smp_sat;
   /* verilator lint_on UNUSEDSIGNAL */
   motion_core #(
       .NAXES   (NAXES),

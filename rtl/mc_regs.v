@@ -14,8 +14,8 @@
 //   answered with ST_DUP (a read is answered with the value as it is now).
 //   PING forgets the last SEQ.
 // - After every PID sample (done_i) a walker reads TLM_HDR and each axis's
-//   POS, CMD, ERR, OUT through the read multiplexer. It checks each axis's
-//   following error |CMD - POS| against FERR (strobing ferr_o), and every
+//   POS, CMD, ERR, OUT and FOLLOW through the read path. It checks each
+//   axis's following error |FOLLOW| against FERR (strobing ferr_o), and every
 //   TLM.decim-th sample it also copies the words of the axes in TLM.axes into
 //   link_tx's RAM and sends them as a telemetry frame, unless the previous
 //   one is still being sent (the sample count in TLM_HDR then shows the gap).
@@ -113,10 +113,8 @@ module mc_regs #(
     input  wire [    NAXES*16-1:0] drv_sel_i,  // registered here (q): the value the pins show
     // motion_core: per-sample values
     input  wire                    done_i,
-    output wire [             3:0] smp_raddr_o,  // motion_core's sample RAM: {axis, field}
+    output wire [             4:0] smp_raddr_o,  // motion_core's sample RAM: {axis, field}
     input  wire [            31:0] smp_rdata_i,
-    input  wire [    NAXES*16-1:0] smp_u_i,
-    input  wire [       NAXES-1:0] smp_sat_i,
     input  wire [       NAXES-1:0] pid_en_i,
     // handwheel decoder
     output reg  [      FILT_W-1:0] hw_filt_o,
@@ -202,14 +200,11 @@ module mc_regs #(
   localparam integer PADN = 4 - NAXES;
   wire [127:0] p_idx = {{(PADN * 32) {1'b0}}, enc_idx_pos_i};
   wire [63:0] p_ecnt = {{(PADN * 16) {1'b0}}, enc_err_cnt_i};
-  wire [63:0] p_u = {{(PADN * 16) {1'b0}}, smp_u_i};
   wire [63:0] p_du = {{(PADN * 16) {1'b0}}, drv_sel_i};
   wire [3:0] p_seen = {{PADN{1'b0}}, enc_idx_seen_i};
   wire [3:0] p_armd = {{PADN{1'b0}}, enc_idx_armed_i};
   wire [3:0] p_eerr = {{PADN{1'b0}}, enc_err_i};
   wire [3:0] p_den = {{PADN{1'b0}}, drv_en_i};
-  wire [3:0] p_pen = {{PADN{1'b0}}, pid_en_i};
-  wire [3:0] p_sat = {{PADN{1'b0}}, smp_sat_i};
   wire [3:0] p_ovr = {{PADN{1'b0}}, drv_ovr_o};
 
   reg [31:0] live;
@@ -219,7 +214,8 @@ module mc_regs #(
       case (ra_off)
         R_AX_IDX: live = p_idx[ra_ax*32+:32];
         R_AX_ENC_STAT: live = {13'd0, p_seen[ra_ax], p_armd[ra_ax], p_eerr[ra_ax], p_ecnt[ra_ax*16+:16]};
-        R_AX_OUT: live = {13'd0, p_den[ra_ax], p_pen[ra_ax], p_sat[ra_ax], p_u[ra_ax*16+:16]};
+        // the sample RAM's OUT word has the rest (ORed in below)
+        R_AX_OUT: live = {13'd0, p_den[ra_ax], 18'd0};
         R_AX_DRV: live = {15'd0, p_ovr[ra_ax], p_du[ra_ax*16+:16]};
         default:  live = 32'd0;
       endcase
@@ -258,25 +254,28 @@ module mc_regs #(
   end
   always @(posedge clk) q <= live;
 
-  // A sample's POS, CMD and ERR come from motion_core's sample RAM, which
-  // answers in the same two clocks as the multiplexer.
-  reg  [1:0] ra_fld;
+  // A sample's POS, CMD, ERR, OUT and FOLLOW come from motion_core's sample
+  // RAM, which answers in the same two clocks as the multiplexer; the
+  // multiplexer gives 0 for them but OUT's live drive-enable bit.
+  reg  [2:0] ra_fld;
   reg        ra_smp, q_smp;
   always @(*) begin
     ra_smp = ra[9];
     case (ra_off)
-      R_AX_CMD: ra_fld = 2'd0;
-      R_AX_POS: ra_fld = 2'd1;
-      R_AX_ERR: ra_fld = 2'd2;
+      R_AX_CMD: ra_fld = 3'd0;
+      R_AX_POS: ra_fld = 3'd1;
+      R_AX_ERR: ra_fld = 3'd2;
+      R_AX_OUT: ra_fld = 3'd3;
+      R_AX_FOLLOW: ra_fld = 3'd4;
       default: begin
-        ra_fld = 2'd3;
+        ra_fld = 3'd7;
         ra_smp = 1'b0;
       end
     endcase
   end
   assign smp_raddr_o = {ra_ax, ra_fld};
   always @(posedge clk) q_smp <= ra_smp;
-  wire [31:0] qv = q_smp ? smp_rdata_i : q;
+  wire [31:0] qv = q_smp ? (smp_rdata_i | q) : q;
 
   // ---------------------------------------------------------------------
   // Register decoding: does an address exist, take writes, read back from
@@ -588,9 +587,10 @@ module mc_regs #(
 
   // ---------------------------------------------------------------------
   // Walker: after each sample, TLM_HDR then each axis's POS, CMD, ERR, OUT
-  // (the TLM_WORD order), one read issued per clock. (w_hdr, w_a, w_k) is
-  // the next word to issue.
-  reg  [1:0] w_a, w_k;
+  // (the TLM_WORD order) and FOLLOW (checked, not sent), one read issued per
+  // clock. (w_hdr, w_a, w_k) is the next word to issue.
+  reg  [1:0] w_a;
+  reg  [2:0] w_k;
   reg        w_hdr;
   reg        w_tlm;  // this walk sends telemetry
   reg        w_tlm_busy;  // from its start until the frame is handed over
@@ -599,10 +599,9 @@ module mc_regs #(
   reg  [15:0] tlm_cnt, tlm_decim;
   reg  [2:0] tlm_axes;
   reg        tlm_due_l;
-  reg  [31:0] fb_l, dif;
   wire       tlm_due = tlm_decim != 16'd0 && tlm_cnt + 16'd1 >= tlm_decim;
-  wire       w_start = done_d[1];  // the sample RAM and smp_u swap the clock after done
-  wire       w_last = !w_hdr && w_k == 2'd3 && {2'd0, w_a} == NAXES4 - 4'd1;
+  wire       w_start = done_d[1];  // the sample RAM swaps the clock after done
+  wire       w_last = !w_hdr && w_k == 3'd4 && {2'd0, w_a} == NAXES4 - 4'd1;
   wire       tlm_free = !(tlm_pend || tlm_sending || w_tlm_busy);
 
   // TLM register (also in the shadow RAM for read-back).
@@ -637,14 +636,14 @@ module mc_regs #(
       w_act <= 1'b1;
       w_hdr <= 1'b1;
       w_a   <= 2'd0;
-      w_k   <= 2'd0;
+      w_k   <= 3'd0;
       w_tlm <= tlm_due_l && tlm_free;
     end else if (w_act) begin
       w_hdr <= 1'b0;
       if (w_last) w_act <= 1'b0;
       if (!w_hdr) begin
-        w_k <= w_k + 2'd1;
-        if (w_k == 2'd3) w_a <= w_a + 2'd1;
+        w_k <= (w_k == 3'd4) ? 3'd0 : w_k + 3'd1;
+        if (w_k == 3'd4) w_a <= w_a + 2'd1;
       end
     end
   end
@@ -653,10 +652,11 @@ module mc_regs #(
   reg [3:0] w_off;
   always @(*) begin
     case (w_k)
-      2'd0:    w_off = TLM_WORD0;
-      2'd1:    w_off = TLM_WORD1;
-      2'd2:    w_off = TLM_WORD2;
-      default: w_off = TLM_WORD3;
+      3'd0:    w_off = TLM_WORD0;
+      3'd1:    w_off = TLM_WORD1;
+      3'd2:    w_off = TLM_WORD2;
+      3'd3:    w_off = TLM_WORD3;
+      default: w_off = R_AX_FOLLOW;
     endcase
   end
   always @(posedge clk) begin
@@ -671,12 +671,12 @@ module mc_regs #(
 
   // Tags {valid, last, hdr, k} and the axis follow the reads through the
   // two-clock pipeline.
-  reg [4:0] t1, t2;
+  reg [5:0] t1, t2;
   reg [1:0] ta1, ta2;
   always @(posedge clk) begin
     if (rst) begin
-      t1 <= 5'd0;
-      t2 <= 5'd0;
+      t1 <= 6'd0;
+      t2 <= 6'd0;
     end else begin
       t1 <= {w_act, w_last, w_hdr, w_k};
       t2 <= t1;
@@ -684,16 +684,18 @@ module mc_regs #(
     ta1 <= w_a;
     ta2 <= ta1;
   end
-  wire       t_v = t2[4];
-  wire       t_last = t2[3];
-  wire       t_hdr = t2[2];
-  wire [1:0] t_k = t2[1:0];
-  assign w_wr = t_v && w_tlm && (t_hdr || tlm_axes[ta2]);
+  wire       t_v = t2[5];
+  wire       t_last = t2[4];
+  wire       t_hdr = t2[3];
+  wire [2:0] t_k = t2[2:0];
+  wire       t_follow = !t_hdr && t_k == 3'd4;  // checked, not sent
+  assign w_wr = t_v && w_tlm && (t_hdr || (tlm_axes[ta2] && !t_follow));
 
   // Telemetry words and the following-error check, as the values arrive:
-  // trip when FERR != 0 and |CMD - POS| > FERR, one adder for both signs
+  // trip when FERR != 0 and |FOLLOW| > FERR, one adder for both signs
   // (FERR - d when d >= 0, d + FERR when d < 0: negative means a trip).
   wire [15:0] flim = sq[15:0];
+  wire [31:0] dif = qv;
   wire        dneg = dif[31];
   /* verilator lint_off UNUSEDSIGNAL */
   wire [32:0] fsum = ({dif[31], dif} ^ {33{~dneg}}) + {17'd0, flim} + {32'd0, ~dneg};
@@ -718,14 +720,7 @@ module mc_regs #(
         w_tlm_busy <= 1'b0;
         tlm_n      <= w_ptr - 4'd1;
       end
-      if (t_v && !t_hdr) begin
-        case (t_k)
-          2'd0: fb_l <= qv;
-          2'd1: dif <= qv - fb_l;
-          2'd2: ferr_o <= ferr_hit[NAXES-1:0];
-          default: ;
-        endcase
-      end
+      if (t_v && t_follow) ferr_o <= ferr_hit[NAXES-1:0];
     end
   end
 

@@ -14,12 +14,14 @@
 //   the sample's outputs are latched together into smp_u/smp_sat and reach
 //   the drive in the next clock, so every axis's drive changes in the same
 //   clock, LATENCY cycles (pid_core) + 2 after the tick.
-// - The sample's command, feedback and error per axis are kept in a block
-//   RAM of two banks: the sweep writes one while smp_raddr reads the other,
-//   and done swaps them, so a read always sees one whole sample, the last
-//   completed, from the clock after done until the next done. smp_raddr =
-//   {axis, field} (field 0 command, 1 feedback, 2 error; 3 and absent axes
-//   read 0), smp_rdata one clock later.
+// - The sample's words per axis are kept in a block RAM of two banks: the
+//   sweep writes one while smp_raddr reads the other, and done swaps them,
+//   so a read always sees one whole sample, the last completed, from the
+//   clock after done until the next done. smp_raddr = {axis, field}, fields
+//   (SMP_* in hls/motion_core.hpp) 0 command, 1 feedback, 2 error, 3 output
+//   {[17] PID enabled, [16] saturated, [15:0] u}, 4 following error
+//   command - feedback (saturated to 32 bits); 5-7 and absent axes read 0.
+//   smp_rdata follows one clock later.
 // - drv_allow (from the safety logic) low forces the drive value to 0 and the
 //   pins low in the next clock, whatever the PID does. drv_ovr hands an axis's
 //   drive to the host (drv_ovr_val) instead of the PID: the host-loop mode.
@@ -99,7 +101,7 @@ module motion_core #(
     // per-sample telemetry
     output wire                  tick,
     output wire                  done,
-    input  wire [           3:0] smp_raddr,
+    input  wire [           4:0] smp_raddr,
     output reg  [          31:0] smp_rdata,
     output reg  [  NAXES*16-1:0] smp_u,
     output reg  [     NAXES-1:0] smp_sat,
@@ -192,7 +194,7 @@ module motion_core #(
   /* verilator lint_off UNUSEDSIGNAL */
   wire [         3:0] pid_smp_ax;
   /* verilator lint_on UNUSEDSIGNAL */
-  wire [         1:0] pid_smp_fld;
+  wire [         2:0] pid_smp_fld;
   wire [        31:0] pid_smp_wd;
   /* verilator lint_off PINCONNECTEMPTY */
   pid_core #(
@@ -230,11 +232,11 @@ module motion_core #(
   // not reset: a reset in the middle of a sweep must not publish the bank it
   // was writing (the next sweep rewrites all of it before done).
   (* no_rw_check *)
-  reg [31:0] smp_ram[0:31];
+  reg [31:0] smp_ram[0:63];
   reg pb;
   integer si;
   initial begin
-    for (si = 0; si < 32; si = si + 1) smp_ram[si] = 32'd0;
+    for (si = 0; si < 64; si = si + 1) smp_ram[si] = 32'd0;
     pb = 1'b0;
   end
   always @(posedge clk) begin

@@ -15,9 +15,12 @@
 //   pulses; cmd_i and fb_i are sampled in that cycle, for all axes at once so
 //   coordinated axes see the same instant. LATENCY cycles after tick_o,
 //   done_o pulses and u_o/err_o/sat_o hold the new sample's values.
-// - smp_* stream each axis's command, feedback and error of the sample as
-//   the sweep uses them, one word per clock, all before done_o. A user that
-//   keeps them in block RAM needs none of err_o's flip-flops (motion_core).
+// - smp_* stream each axis's words of the sample as the sweep makes them,
+//   one word per clock, all before done_o: command, feedback, error, the
+//   output word {en, sat, u} (as u_o/sat_o/en_o take them) and the
+//   following error cmd - fb (saturated to 32 bits, before deadband and
+//   clamp). A user that keeps them in block RAM needs none of err_o's
+//   flip-flops and no copy of the outputs for reading (motion_core).
 //
 // Structure (docs/numerics.md section 8 gives the area and the reasons). Three
 // shared units run a fixed microcoded schedule for every axis in turn:
@@ -87,11 +90,12 @@ module pid_core #(
     output wire [   NAXES*32-1:0] err_o,   // processed error, signed counts
     output wire [      NAXES-1:0] sat_o,   // output limit active
     output wire [      NAXES-1:0] en_o,    // axis enabled
-    // the sample's inputs and error as the sweep takes them, for a sample
-    // RAM (motion_core): field 0 command, 1 feedback, 2 error
+    // the sample's words as the sweep makes them, for a sample RAM
+    // (motion_core): field 0 command, 1 feedback, 2 error, 3 output word
+    // ([15:0] u, [16] sat, [17] en), 4 following error
     output wire                   smp_we_o,
     output wire [            3:0] smp_ax_o,
-    output wire [            1:0] smp_fld_o,
+    output wire [            2:0] smp_fld_o,
     output wire [           31:0] smp_wd_o,
     output reg                    tick_o,  // sample instant
     output reg                    done_o,  // sweep finished, outputs valid
@@ -806,14 +810,19 @@ module pid_core #(
   assign u_o   = u_r;
   assign err_o = e_r;
   // Command and feedback leave the chain's head in slot cycles 0 and 1, the
-  // error the front ALU in cycle 7 (the microcode's chain-shift and write-e
-  // columns): never two in one clock.
+  // raw error cmd - fb is in the front ALU's accumulator in cycle 2, the
+  // error in cycle 7 (the microcode's chain-shift and write-e columns), and
+  // the back ALU has the previous axis's output in cycle 10 (the drive
+  // column): never two in one clock.
+  wire smp_raw = fa_ok & (cy == 5'd2);
+  wire smp_out = run & ou_we & (sl != {SLW{1'b0}});
   /* verilator lint_off WIDTH */
-  assign smp_we_o  = fa_ok & (ch_shift | fa_we_e);
-  assign smp_ax_o  = sl;
+  assign smp_we_o  = (fa_ok & (ch_shift | fa_we_e)) | smp_raw | smp_out;
+  assign smp_ax_o  = smp_out ? slp : sl;
   /* verilator lint_on WIDTH */
-  assign smp_fld_o = fa_we_e ? 2'd2 : {1'b0, cy[0]};
-  assign smp_wd_o  = fa_we_e ? fa_acc[31:0] : in_w;
+  assign smp_fld_o = smp_out ? 3'd3 : smp_raw ? 3'd4 : fa_we_e ? 3'd2 : {2'b00, cy[0]};
+  assign smp_wd_o  = smp_out ? {14'd0, en_pad[slp], over | under, u_rnd} :
+                     (smp_raw | fa_we_e) ? fa_acc[31:0] : in_w;
   assign sat_o = s_r;
   assign en_o  = en;
 

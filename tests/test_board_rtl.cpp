@@ -297,7 +297,14 @@ TEST(BoardRtl, IpSetLoadsEachAxisCommand) {
   for (int a = 0; a < 3; ++a) EXPECT_EQ(tb.read(ax(a, br::AX_CMD)), 0u) << a;
   tb.write(br::IP_CTRL, 1u << bb::I_SET);
   tb.run(200);
-  for (int a = 0; a < 3; ++a) EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), v[a]) << a;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), v[a]) << a;
+    EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_FOLLOW))), v[a]) << a;  // the encoders are at 0
+  }
+  // FOLLOW saturates: -2^31 + 1 - (2^31 - 1) is below the 32-bit range.
+  tb.write(ax(2, br::AX_POS), 0x7FFFFFFFu);
+  tb.run(200);
+  EXPECT_EQ(tb.read(ax(2, br::AX_FOLLOW)), 0x80000000u);
   // Again with new values, and clear in the same write.
   for (int a = 0; a < 3; ++a) tb.write(uint16_t(br::IP_SET_X + a), uint32_t(-v[a] / 2));
   tb.write(br::IP_CTRL, 1u << bb::I_SET | 1u << bb::I_CLR);

@@ -156,6 +156,9 @@ std::deque<std::pair<uint8_t, uint32_t>> random_config(std::mt19937_64& rng) {
     w.push_back({uint8_t(base | pid_reg::KD_B), coef(m(rng), s(rng))});
     w.push_back({uint8_t(base | pid_reg::KF1), rng() % 4 ? 0 : coef(m(rng), s(rng))});
     w.push_back({uint8_t(base | pid_reg::OLIM), rng() % 3 ? 0 : any(rng) % 40000});
+    // Deadband and error clamp sometimes, so ERR and FOLLOW differ.
+    w.push_back({uint8_t(base | pid_reg::DBAND), rng() % 3 ? 0 : uint32_t(rng() % 8)});
+    w.push_back({uint8_t(base | pid_reg::ELIM), rng() % 3 ? 0 : uint32_t(20 + rng() % 200)});
     w.push_back({uint8_t(base | pid_reg::CTRL), uint32_t(rng() % 5 != 0)});
   }
   w.push_back({uint8_t(pid_reg::GLOBAL_AXIS << 4 | pid_reg::G_TS), uint32_t(50 + rng() % 600)});
@@ -226,7 +229,7 @@ void random_run(uint32_t seed, uint64_t cycles) {
       if (rng() % 500 == 0) in.drv_ovr_val[a] = int16_t(rng());
     }
     // Sample RAM: every word, including the unused field and absent axes.
-    in.smp_raddr = uint8_t(rng() % 16);
+    in.smp_raddr = uint8_t(rng() % 32);
     in.rst = rng() % 150000 == 0;
     ticks += o.tick;
     s.cycle();

@@ -65,7 +65,7 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
       if (step == 100) in.drv_allow[0] = in.drv_allow[1] = true;
       if (rng() % 5000 == 0) in.drv_ovr[rng() % 2] ^= true;
       in.drv_ovr_val[0] = int16_t(rng() % 2000);
-      if (rng() % 50 == 0) in.smp_raddr = uint8_t(rng() % 16);
+      if (rng() % 50 == 0) in.smp_raddr = uint8_t(rng() % 32);
       in.ip_set = step == 2000 || step == 20000 ? 7 : 0;
       in.ip_set_pos[0] = int32_t(step) / 10;
       in.ip_set_pos[1] = -int32_t(step) / 10;
