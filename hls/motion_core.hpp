@@ -42,8 +42,9 @@ struct MotionIn {
   bool enc_idx_arm[NAXES] = {}, enc_idx_disarm[NAXES] = {}, enc_err_clr[NAXES] = {};
   // drive control
   bool drv_allow[NAXES] = {};
-  bool drv_ovr[NAXES] = {};
-  int16_t drv_ovr_val[NAXES] = {};
+  bool drv_ovr[NAXES] = {};     // level: the host drives the axis
+  bool drv_ovr_we[NAXES] = {};  // strobe: that axis's drv_cmd <- drv_ovr_val
+  int16_t drv_ovr_val = 0;
   // sample RAM read: axis << 3 | field
   uint8_t smp_raddr = 0;
 };
@@ -60,7 +61,7 @@ struct MotionOut {
   int16_t drv_u[NAXES] = {};
   bool tick = false, done = false;
   uint32_t smp_rdata = 0;
-  int16_t smp_u[NAXES] = {};
+  int16_t drv_cmd[NAXES] = {};
   bool smp_sat[NAXES] = {}, pid_en[NAXES] = {};
   int32_t pos[NAXES] = {}, cmd[NAXES] = {};
 };
@@ -110,7 +111,7 @@ class MotionCore {
       o.dir[a] = r_.dir[a];
       o.drv_en[a] = r_.drv_en[a];
       o.drv_u[a] = r_.drv_u[a];
-      o.smp_u[a] = r_.smp_u[a];
+      o.drv_cmd[a] = r_.drv_cmd[a];
       o.smp_sat[a] = r_.smp_sat[a];
       o.pid_en[a] = pid_.enabled(a);
       o.pos[a] = o.enc[a].pos;
@@ -150,16 +151,17 @@ class MotionCore {
       }
       n.pb = !r_.pb;
     }
-    if (in.rst) {
-      for (int a = 0; a < NAXES; ++a) {
-        n.smp_u[a] = 0;
+    for (int a = 0; a < NAXES; ++a) {
+      if (in.rst) {
+        n.drv_cmd[a] = 0;
         n.smp_sat[a] = false;
+        continue;
       }
-    } else if (done) {
-      for (int a = 0; a < NAXES; ++a) {
-        n.smp_u[a] = int16_t(pid_.core().u(a));
-        n.smp_sat[a] = pid_.core().sat(a);
-      }
+      if (in.drv_ovr_we[a])
+        n.drv_cmd[a] = in.drv_ovr_val;
+      else if (done && !in.drv_ovr[a])
+        n.drv_cmd[a] = int16_t(pid_.core().u(a));
+      if (done) n.smp_sat[a] = pid_.core().sat(a);
     }
 
     // Drive stage.
@@ -212,7 +214,7 @@ class MotionCore {
     ii.set = in.ip_set;
     if (!ip_.quiet(ii) || !pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
     for (int a = 0; a < NAXES; ++a) {
-      if (!dec_[a].quiet(quad_in(in, a, false))) return false;
+      if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
       if (r_.drv_u[a] != u_sel(in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
     }
     return true;
@@ -239,9 +241,7 @@ class MotionCore {
   static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
 
   uint32_t read_bank(uint8_t raddr) const { return uint32_t(r_.bank[r_.pb][raddr >> 3 & 3][raddr & 7]); }
-  int16_t u_sel(const In& in, int a) const {
-    return !in.drv_allow[a] ? int16_t(0) : in.drv_ovr[a] ? in.drv_ovr_val[a] : r_.smp_u[a];
-  }
+  int16_t u_sel(const In& in, int a) const { return !in.drv_allow[a] ? int16_t(0) : r_.drv_cmd[a]; }
   bool drv_en(const In& in, int a) const { return in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]); }
   static typename Pid::In pid_in(const In& in, const int32_t* cmd, const int32_t* fb) {
     typename Pid::In pi;
@@ -278,7 +278,7 @@ class MotionCore {
     int32_t bank[2][4][SMP_FIELDS] = {};  // [bank][axis][field], as the RTL's 64 words
     bool pb = false;
     uint32_t smp_rdata = 0;
-    int16_t smp_u[NAXES] = {};
+    int16_t drv_cmd[NAXES] = {};
     bool smp_sat[NAXES] = {};
     uint32_t pcnt = 0;
     int16_t drv_u[NAXES] = {};

@@ -136,8 +136,9 @@ module mc_board #(
   wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_pos_load, enc_idx_arm, enc_idx_disarm, enc_err_clr;
   wire [       NAXES-1:0] enc_err, enc_idx_armed, enc_idx_seen;
   wire [    NAXES*32-1:0] enc_pos_load_val, enc_idx_pos;
-  wire [    NAXES*16-1:0] enc_err_cnt, drv_ovr_val, drv_sel;
-  wire [       NAXES-1:0] drv_ovr, pid_en;
+  wire [    NAXES*16-1:0] enc_err_cnt, drv_sel;
+  wire [            15:0] drv_ovr_val;
+  wire [       NAXES-1:0] drv_ovr, drv_ovr_we, pid_en;
   wire [             4:0] smp_raddr;
   wire [            31:0] smp_rdata;
   wire                    done;
@@ -220,6 +221,7 @@ module mc_board #(
       .enc_idx_armed_i   (enc_idx_armed),
       .enc_idx_seen_i    (enc_idx_seen),
       .drv_ovr_o         (drv_ovr),
+      .drv_ovr_we_o      (drv_ovr_we),
       .drv_ovr_val_o     (drv_ovr_val),
       .drv_en_i          (drv_en_o),
       .drv_sel_i         (drv_sel),
@@ -264,7 +266,7 @@ module mc_board #(
   /* verilator lint_off UNUSEDSIGNAL */
   wire                tick;
   wire [NAXES*32-1:0] enc_vel, pos_live, cmd_live;
-  wire [NAXES*16-1:0] drv_u, smp_u;
+  wire [NAXES*16-1:0] drv_u, drv_cmd;
   wire [   NAXES-1:0] smp_sat;
   /* verilator lint_on UNUSEDSIGNAL */
   motion_core #(
@@ -315,6 +317,7 @@ module mc_board #(
       .enc_vel         (enc_vel),
       .drv_allow       (allow),
       .drv_ovr         (drv_ovr),
+      .drv_ovr_we      (drv_ovr_we),
       .drv_ovr_val     (drv_ovr_val),
       .pwm_o           (pwm_o),
       .dir_o           (dir_o),
@@ -325,7 +328,7 @@ module mc_board #(
       .done            (done),
       .smp_raddr       (smp_raddr),
       .smp_rdata       (smp_rdata),
-      .smp_u           (smp_u),
+      .drv_cmd         (drv_cmd),
       .smp_sat         (smp_sat),
       .pid_en          (pid_en),
       .pos             (pos_live),

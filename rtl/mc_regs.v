@@ -108,7 +108,8 @@ module mc_regs #(
     input  wire [       NAXES-1:0] enc_idx_seen_i,
     // motion_core: drives
     output reg  [       NAXES-1:0] drv_ovr_o,
-    output reg  [    NAXES*16-1:0] drv_ovr_val_o,
+    output reg  [       NAXES-1:0] drv_ovr_we_o,   // a DRV write with the override bit: load the value
+    output wire [            15:0] drv_ovr_val_o,
     input  wire [       NAXES-1:0] drv_en_i,
     input  wire [    NAXES*16-1:0] drv_sel_i,  // registered here (q): the value the pins show
     // motion_core: per-sample values
@@ -335,6 +336,7 @@ module mc_regs #(
   wire [FILT_W-1:0] filt_len = (filt_field >> FILT_W) != 8'd0 ? {FILT_W{1'b1}} : filt_field[FILT_W-1:0];
   /* verilator lint_on WIDTH */
   assign hw_load_val_o = data;
+  assign drv_ovr_val_o = data[B_D_VAL_LSB+:16];
 
   // The checks of a frame that need no payload.
   reg [7:0] chk;
@@ -374,6 +376,7 @@ module mc_regs #(
     enc_idx_arm_o    <= {NAXES{1'b0}};
     enc_idx_disarm_o <= {NAXES{1'b0}};
     enc_err_clr_o    <= {NAXES{1'b0}};
+    drv_ovr_we_o     <= {NAXES{1'b0}};
     if (rst) begin
       ip_hold_o     <= 1'b0;
       wdog_o        <= WDOG_RESET;
@@ -425,8 +428,8 @@ module mc_regs #(
             end
             R_AX_ENC_STAT: enc_err_clr_o[ax] <= data[B_ES_W_ERR_CLR];
             R_AX_DRV: begin
-              drv_ovr_val_o[ax*16+:16] <= data[B_D_VAL_LSB+:16];
-              drv_ovr_o[ax] <= data[B_D_OVR];
+              drv_ovr_we_o[ax] <= data[B_D_OVR];
+              drv_ovr_o[ax]    <= data[B_D_OVR];
             end
             default: ;
           endcase

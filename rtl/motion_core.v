@@ -11,7 +11,7 @@
 //   position with ip_set, a strobe per axis, while the interpolator is idle).
 // - The PID samples cmd/pos at tick, for all axes at once, and the decoders
 //   take their velocity sample at the same tick. When the sweep ends (done),
-//   the sample's outputs are latched together into smp_u/smp_sat and reach
+//   the sample's outputs are latched together into drv_cmd/smp_sat and reach
 //   the drive in the next clock, so every axis's drive changes in the same
 //   clock, LATENCY cycles (pid_core) + 2 after the tick.
 // - The sample's words per axis are kept in a block RAM of two banks: the
@@ -24,7 +24,9 @@
 //   smp_rdata follows one clock later.
 // - drv_allow (from the safety logic) low forces the drive value to 0 and the
 //   pins low in the next clock, whatever the PID does. drv_ovr hands an axis's
-//   drive to the host (drv_ovr_val) instead of the PID: the host-loop mode.
+//   drive to the host instead of the PID (the host-loop mode): done then
+//   leaves its drv_cmd alone, and drv_ovr_we loads it with drv_ovr_val. When
+//   drv_ovr falls, the host's last value holds until the PID's next done.
 // - PWM: a free-running PWM_BITS counter; the duty is the magnitude of
 //   drv_u in steps of 2^(15-PWM_BITS) drive units, so full scale is always
 //   on; dir_o gives the sign. drv_en_o enables the bridge for an axis whose
@@ -90,8 +92,9 @@ module motion_core #(
     output wire [  NAXES*32-1:0] enc_vel,
     // drive control
     input  wire [     NAXES-1:0] drv_allow,
-    input  wire [     NAXES-1:0] drv_ovr,
-    input  wire [  NAXES*16-1:0] drv_ovr_val,
+    input  wire [     NAXES-1:0] drv_ovr,     // level: the host drives the axis
+    input  wire [     NAXES-1:0] drv_ovr_we,  // strobe: drv_cmd of the axis <- drv_ovr_val
+    input  wire [          15:0] drv_ovr_val,
     // H-bridge pins
     output reg  [     NAXES-1:0] pwm_o,
     output reg  [     NAXES-1:0] dir_o,
@@ -103,7 +106,7 @@ module motion_core #(
     output wire                  done,
     input  wire [           4:0] smp_raddr,
     output reg  [          31:0] smp_rdata,
-    output reg  [  NAXES*16-1:0] smp_u,
+    output reg  [  NAXES*16-1:0] drv_cmd,  // the drive value before the safety gate
     output reg  [     NAXES-1:0] smp_sat,
     output wire [     NAXES-1:0] pid_en,
     // live positions
@@ -234,7 +237,7 @@ module motion_core #(
   (* no_rw_check *)
   reg [31:0] smp_ram[0:63];
   reg pb;
-  integer si;
+  integer si, a;
   initial begin
     for (si = 0; si < 64; si = si + 1) smp_ram[si] = 32'd0;
     pb = 1'b0;
@@ -248,14 +251,18 @@ module motion_core #(
   end
 
   // pid_core writes each axis's outputs at a different clock of the sweep;
-  // latching them at done publishes one coherent sample.
+  // latching them at done publishes one coherent sample. An overridden
+  // axis's drv_cmd is the host's instead: one register either way.
   always @(posedge clk) begin
     if (rst) begin
-      smp_u   <= {NAXES * 16{1'b0}};
+      drv_cmd <= {NAXES * 16{1'b0}};
       smp_sat <= {NAXES{1'b0}};
-    end else if (done) begin
-      smp_u   <= pid_u;
-      smp_sat <= pid_sat;
+    end else begin
+      for (a = 0; a < NAXES; a = a + 1) begin
+        if (drv_ovr_we[a]) drv_cmd[a*16+:16] <= drv_ovr_val;
+        else if (done && !drv_ovr[a]) drv_cmd[a*16+:16] <= pid_u[a*16+:16];
+      end
+      if (done) smp_sat <= pid_sat;
     end
   end
 
@@ -270,10 +277,12 @@ module motion_core #(
 
   generate
     for (g = 0; g < NAXES; g = g + 1) begin : g_drv
-      wire signed [15:0] u_sel = ~drv_allow[g] ? 16'sd0 :
-                                 drv_ovr[g] ? drv_ovr_val[g*16+:16] : smp_u[g*16+:16];
+      // The safety gate acts on the pins, after the magnitude: the same
+      // result as gating the value, without a LUT per value bit.
+      wire        [15:0] u_cmd = drv_cmd[g*16+:16];
+      wire signed [15:0] u_sel = ~drv_allow[g] ? 16'sd0 : u_cmd;
       // |u| fits 16 bits unsigned even for -32768, which is full scale.
-      wire        [15:0] u_mag = u_sel[15] ? 16'd0 - u_sel : u_sel;
+      wire        [15:0] u_mag = u_cmd[15] ? 16'd0 - u_cmd : u_cmd;
       wire        [15:0] duty = u_mag >> (15 - PWM_BITS);
       wire        [15:0] pcnt_w = {{(16 - PWM_BITS) {1'b0}}, pcnt};
       assign drv_sel[g*16+:16] = u_sel;
@@ -285,8 +294,8 @@ module motion_core #(
           drv_en_o[g]     <= 1'b0;
         end else begin
           drv_u[g*16+:16] <= u_sel;
-          pwm_o[g]        <= duty > pcnt_w;
-          dir_o[g]        <= u_sel[15];
+          pwm_o[g]        <= drv_allow[g] & (duty > pcnt_w);
+          dir_o[g]        <= drv_allow[g] & u_cmd[15];
           drv_en_o[g]     <= drv_allow[g] & (pid_en[g] | drv_ovr[g]);
         end
       end

@@ -404,7 +404,7 @@ class Machine {
         pending_ = false;
         if (step_ >= start_step_) {
           res_.sample_clock.push_back(done_clock_);
-          for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.smp_u[a]);
+          for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.drv_cmd[a]);
         }
       }
       if (o.done) {

@@ -26,8 +26,9 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   d.ip_clr = in.ip_clr;
   d.ip_set = in.ip_set;
   for (int a = 0; a < 3; ++a) vl::put32(d.ip_set_pos, a, uint32_t(in.ip_set_pos[a]));
-  uint32_t ea = 0, eb = 0, ez = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0, allow = 0, ovr = 0;
-  uint64_t filt = 0, ovv = 0;
+  uint32_t ea = 0, eb = 0, ez = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0, allow = 0, ovr = 0,
+           ovw = 0;
+  uint64_t filt = 0;
   for (int a = 0; a < N; ++a) {
     ea |= uint32_t(in.enc_a[a]) << a;
     eb |= uint32_t(in.enc_b[a]) << a;
@@ -42,7 +43,7 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
     eclr |= uint32_t(in.enc_err_clr[a]) << a;
     allow |= uint32_t(in.drv_allow[a]) << a;
     ovr |= uint32_t(in.drv_ovr[a]) << a;
-    ovv |= uint64_t(uint16_t(in.drv_ovr_val[a])) << (16 * a);
+    ovw |= uint32_t(in.drv_ovr_we[a]) << a;
   }
   vl::set(d.enc_a, ea);
   vl::set(d.enc_b, eb);
@@ -56,7 +57,8 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   vl::set(d.enc_err_clr, eclr);
   vl::set(d.drv_allow, allow);
   vl::set(d.drv_ovr, ovr);
-  vl::set(d.drv_ovr_val, ovv);
+  vl::set(d.drv_ovr_we, ovw);
+  d.drv_ovr_val = uint16_t(in.drv_ovr_val);
   d.smp_raddr = in.smp_raddr;
 }
 
@@ -81,7 +83,7 @@ MotionOut<N> read_outputs(const Model& d) {
     o.dir[a] = (d.dir_o >> a) & 1;
     o.drv_en[a] = (d.drv_en_o >> a) & 1;
     o.drv_u[a] = int16_t(vl::get_bits(d.drv_u, 16 * a, 16));
-    o.smp_u[a] = int16_t(vl::get_bits(d.smp_u, 16 * a, 16));
+    o.drv_cmd[a] = int16_t(vl::get_bits(d.drv_cmd, 16 * a, 16));
     o.smp_sat[a] = (d.smp_sat >> a) & 1;
     o.pid_en[a] = (d.pid_en >> a) & 1;
     o.pos[a] = int32_t(vl::get_bits(d.pos, 32 * a, 32));

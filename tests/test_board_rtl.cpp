@@ -4,6 +4,7 @@
 // twin, and segments running through the interpolator into the PID.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <functional>
 #include <random>
 
@@ -310,6 +311,35 @@ TEST(BoardRtl, IpSetLoadsEachAxisCommand) {
   tb.write(br::IP_CTRL, 1u << bb::I_SET | 1u << bb::I_CLR);
   tb.run(200);
   for (int a = 0; a < 3; ++a) EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), -v[a] / 2) << a;
+}
+
+// DRV hands an axis's drive to the host: the value reads back and sets the
+// PWM duty at once; clearing the override gives the drive back to the PID at
+// its next sample (here a disabled PID: 0).
+TEST(BoardRtl, DriveOverrideAppliesAndReleases) {
+  BoardTb tb;
+  auto& p = tb.pins();
+  tb.write(br::CTRL, 1u << bb::C_ARM);
+  auto duty = [&] {  // PWM high clocks over one 512-clock period
+    int hi = 0;
+    for (int i = 0; i < 512; ++i) {
+      tb.run(1);
+      hi += p.Y_PWM;
+    }
+    return hi;
+  };
+  for (int16_t v : {int16_t(0x4000), int16_t(-0x2000), int16_t(32767)}) {
+    tb.write(ax(1, br::AX_DRV), 1u << bb::D_OVR | uint16_t(v));
+    EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 1u << bb::D_OVR | uint16_t(v));
+    EXPECT_TRUE(p.Y_EN);
+    EXPECT_EQ(bool(p.Y_DIR), v < 0);
+    EXPECT_NEAR(duty(), std::abs(v) >> 6, 1) << v;
+  }
+  tb.write(ax(1, br::AX_DRV), 0);
+  tb.run(200);  // the next sample
+  EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 0u);
+  EXPECT_FALSE(p.Y_EN);
+  EXPECT_EQ(duty(), 0);
 }
 
 // The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads

@@ -105,7 +105,7 @@ class MotionCosim {
       check("dir", a, d.dir[a], t.dir[a]);
       check("drv_en", a, d.drv_en[a], t.drv_en[a]);
       check("drv_u", a, d.drv_u[a], t.drv_u[a]);
-      check("smp_u", a, d.smp_u[a], t.smp_u[a]);
+      check("drv_cmd", a, d.drv_cmd[a], t.drv_cmd[a]);
       check("smp_sat", a, d.smp_sat[a], t.smp_sat[a]);
       check("pid_en", a, d.pid_en[a], t.pid_en[a]);
       check("pos", a, d.pos[a], t.pos[a]);
@@ -226,9 +226,10 @@ void random_run(uint32_t seed, uint64_t cycles) {
       in.enc_idx_clr_en[a] = rng() % 2;
       if (rng() % 20000 == 0) in.drv_allow[a] = !in.drv_allow[a];
       if (rng() % 20000 == 0) in.drv_ovr[a] = !in.drv_ovr[a];
-      if (rng() % 500 == 0) in.drv_ovr_val[a] = int16_t(rng());
+      in.drv_ovr_we[a] = rng() % 500 == 0;
     }
-    // Sample RAM: every word, including the unused field and absent axes.
+    in.drv_ovr_val = int16_t(rng());
+    // Sample RAM: every word, including the unused fields and absent axes.
     in.smp_raddr = uint8_t(rng() % 32);
     in.rst = rng() % 150000 == 0;
     ticks += o.tick;

@@ -28,7 +28,7 @@ void expect_same(const Twin::Out& a, const Twin::Out& b, uint64_t clock) {
     ASSERT_EQ(a.dir[x], b.dir[x]) << clock;
     ASSERT_EQ(a.drv_en[x], b.drv_en[x]) << clock;
     ASSERT_EQ(a.drv_u[x], b.drv_u[x]) << clock;
-    ASSERT_EQ(a.smp_u[x], b.smp_u[x]) << clock;
+    ASSERT_EQ(a.drv_cmd[x], b.drv_cmd[x]) << clock;
     ASSERT_EQ(a.pos[x], b.pos[x]) << clock;
     ASSERT_EQ(a.cmd[x], b.cmd[x]) << clock;
   }
@@ -64,7 +64,8 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
       if (rng() % 3000 == 0) in.drv_allow[rng() % 2] ^= true;
       if (step == 100) in.drv_allow[0] = in.drv_allow[1] = true;
       if (rng() % 5000 == 0) in.drv_ovr[rng() % 2] ^= true;
-      in.drv_ovr_val[0] = int16_t(rng() % 2000);
+      in.drv_ovr_we[0] = rng() % 300 == 0;
+      in.drv_ovr_val = int16_t(rng() % 2000);
       if (rng() % 50 == 0) in.smp_raddr = uint8_t(rng() % 32);
       in.ip_set = step == 2000 || step == 20000 ? 7 : 0;
       in.ip_set_pos[0] = int32_t(step) / 10;
@@ -108,7 +109,7 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
     // Most steps are quiet: the fast-forward is worth having, and this test
     // exercised it.
     EXPECT_GT(skipped, clocks / 2) << "seed " << seed;
-    EXPECT_NE(ref.outputs().smp_u[0], 0) << "the loop never acted, seed " << seed;
+    EXPECT_NE(ref.outputs().drv_cmd[0], 0) << "the loop never acted, seed " << seed;
   }
 }
 
