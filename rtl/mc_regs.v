@@ -23,6 +23,11 @@
 //   from a shadow block RAM written with every register write, so their
 //   read-back costs no multiplexer; live values go through the multiplexer.
 //   The shadow RAM holds the reset values from configuration on.
+// - The link counters (LINK_CRC, LINK_CMD, LINK_JUNK) live in the shadow RAM
+//   too: an event marks its counter pending, and a read-modify-write of the
+//   word adds it when the RAM's ports are free (within some 20 clocks; events
+//   of one counter are a byte time, 120 clocks, apart or more). Being block
+//   RAM, they count from configuration: reset does not clear them.
 `default_nettype none
 
 module mc_regs #(
@@ -145,24 +150,11 @@ module mc_regs #(
   /* verilator lint_on WIDTH */
 
   // ---------------------------------------------------------------------
-  // Link drop counters (16 bits, saturating).
-  reg [15:0] cnt_crc, cnt_frame, cnt_nak, cnt_dup, cnt_junk;
+  // Link drop counters (16 bits, saturating), in the shadow RAM: which
+  // counters have an event not yet added. Counter c is the half c[0] of
+  // the word LINK_CRC + c/2: crc, framing, NAK, duplicate, junk.
   reg drop_busy, cnt_nak_inc, cnt_dup_inc;
-  always @(posedge clk) begin
-    if (rst) begin
-      cnt_crc   <= 16'd0;
-      cnt_frame <= 16'd0;
-      cnt_nak   <= 16'd0;
-      cnt_dup   <= 16'd0;
-      cnt_junk  <= 16'd0;
-    end else begin
-      if (crc_err_i && ~&cnt_crc) cnt_crc <= cnt_crc + 16'd1;
-      if ((framing_i || drop_busy) && ~&cnt_frame) cnt_frame <= cnt_frame + 16'd1;
-      if (cnt_nak_inc && ~&cnt_nak) cnt_nak <= cnt_nak + 16'd1;
-      if (cnt_dup_inc && ~&cnt_dup) cnt_dup <= cnt_dup + 16'd1;
-      if (junk_i && ~&cnt_junk) cnt_junk <= cnt_junk + 16'd1;
-    end
-  end
+  wire [4:0] cnt_ev = {junk_i, cnt_dup_inc, cnt_nak_inc, framing_i | drop_busy, crc_err_i};
   assign kick_o = frame_i;
 
   // ---------------------------------------------------------------------
@@ -237,9 +229,6 @@ module mc_regs #(
           live[B_ST_PID_EN_LSB+:NAXES] = pid_en_i;
         end
         R_FAULT[4:0]: live = {16'd0, fault_i};
-        R_LINK_CRC[4:0]: live = {cnt_frame, cnt_crc};
-        R_LINK_CMD[4:0]: live = {cnt_dup, cnt_nak};
-        R_LINK_JUNK[4:0]: live = {16'd0, cnt_junk};
         R_IP_STAT[4:0]: begin
           live[B_IS_COUNT_LSB+:FIFO_AW+1] = seg_count_i;
           live[B_IS_BUSY] = ip_busy_i;
@@ -292,7 +281,12 @@ module mc_regs #(
   wire       pid_ok_w = (p_ax < NAXES4 && (p_rg < 4'd10 || p_rg == 4'hF)) || (p_ax == 4'hF && p_rg == 4'd0);
   wire       rd_ok = is_pid ? pid_ok_r : (is_glb | is_ax);
   wire       wr_ok = is_pid ? pid_ok_w : (is_glb ? R_GLOBAL_WMASK[addr[4:0]] : is_ax & R_AX_WMASK[addr[3:0]]);
-  wire       rd_shadow = is_glb ? R_GLOBAL_SHADOW[addr[4:0]] : R_AX_SHADOW[addr[3:0]];
+  /* verilator lint_off WIDTH */
+  localparam [31:0] CNT_SHADOW = (32'd1 << R_LINK_CRC[4:0]) | (32'd1 << R_LINK_CMD[4:0]) |
+                                 (32'd1 << R_LINK_JUNK[4:0]);
+  /* verilator lint_on WIDTH */
+  localparam [31:0] GLB_SHADOW = R_GLOBAL_SHADOW | CNT_SHADOW;
+  wire       rd_shadow = is_glb ? GLB_SHADOW[addr[4:0]] : R_AX_SHADOW[addr[3:0]];
   wire [1:0] a_ax = addr[5:4];
 
   // ---------------------------------------------------------------------
@@ -359,8 +353,52 @@ module mc_regs #(
   // The shadow RAM takes every applied write, never one during reset,
   // whatever state the executor powers up in.
   always @(posedge clk) begin
-    if (apply && !rst) shadow[sidx(addr)] <= data;
+    if (!rst) begin
+      if (apply) shadow[sidx(addr)] <= data;
+      else if (cu2) shadow[cu_word(cu_c2[2:1])] <= cu_new;
+    end
     sq <= shadow[sa];
+  end
+
+  // The counters' read-modify-write: a pending counter's word is read when
+  // neither the walker nor the executor needs the read port (cu1 issued,
+  // cu2 the word in sq), one at a time, and written back unless a register
+  // write has the write port in that clock (then it is pending again).
+  reg  [4:0] cnt_pend;
+  reg        cu1, cu2;
+  reg  [2:0] cu_c1, cu_c2;
+  wire       cu_free = ~w_act & (xs != X_RD) & (xs != X_SET) & ~cu1 & ~cu2;
+  reg  [2:0] cu_pick;
+  always @(*) begin
+    casez (cnt_pend)
+      5'b????1: cu_pick = 3'd0;
+      5'b???10: cu_pick = 3'd1;
+      5'b??100: cu_pick = 3'd2;
+      5'b?1000: cu_pick = 3'd3;
+      default:  cu_pick = 3'd4;
+    endcase
+  end
+  wire cu_go = cu_free & (|cnt_pend);
+  function [7:0] cu_word(input [1:0] w);  // the counter's word: LINK_CRC + w
+    /* verilator lint_off WIDTH */
+    cu_word = sidx(R_LINK_CRC + w);
+    /* verilator lint_on WIDTH */
+  endfunction
+  wire [15:0] cu_half = cu_c2[0] ? sq[31:16] : sq[15:0];
+  wire [15:0] cu_inc = cu_half + {15'd0, ~&cu_half};
+  wire [31:0] cu_new = cu_c2[0] ? {cu_inc, sq[15:0]} : {sq[31:16], cu_inc};
+  always @(posedge clk) begin
+    if (rst) begin
+      cnt_pend <= 5'd0;
+      cu1      <= 1'b0;
+      cu2      <= 1'b0;
+    end else begin
+      cnt_pend <= (cnt_pend & ~({4'd0, cu_go} << cu_pick)) | cnt_ev | ({4'd0, cu2 & apply} << cu_c2);
+      cu1      <= cu_go;
+      cu2      <= cu1;
+    end
+    cu_c1 <= cu_pick;
+    cu_c2 <= cu_c1;
   end
   wire w_glb = apply & is_glb;
   wire w_ax = apply & is_ax & ~is_pid;
@@ -668,7 +706,7 @@ module mc_regs #(
       sa <= sidx(R_AXIS_BASE | {8'd0, 2'd0, w_a, R_AX_FERR});
     end else begin
       ra <= addr;
-      sa <= sidx(addr);
+      sa <= cu_go ? cu_word(cu_pick[2:1]) : sidx(addr);
     end
   end
 

@@ -141,6 +141,23 @@ TEST(BoardRtl, BadFramesAreDroppedAndCounted) {
   EXPECT_EQ(tb.read(br::WDOG), 4321u);
 }
 
+// The link counters saturate at 0xFFFF, counting every event on the way,
+// though a byte arrives every 120 clocks while the telemetry walker and the
+// register reads compete for the RAM the counters live in.
+TEST(BoardRtl, LinkCountersSaturate) {
+  BoardTb tb;
+  tb.write(br::TLM, 1u | 1u << bb::T_AXES_LSB);  // the walker's reads and a frame every sample
+  const hp::Bytes junk(30000, 0x00);
+  tb.send_raw(junk);
+  EXPECT_EQ(tb.read(br::LINK_JUNK), 30000u);
+  tb.send_raw(junk);
+  tb.send_raw(hp::Bytes(5536, 0x00));
+  EXPECT_EQ(tb.read(br::LINK_JUNK), 65535u);
+  tb.send_raw(hp::Bytes(10, 0x00));
+  EXPECT_EQ(tb.read(br::LINK_JUNK), 65535u);
+  EXPECT_EQ(tb.read(br::LINK_CRC), 0u) << "a neighbouring counter moved";
+}
+
 // Three dwell segments of a long duration: the first is loaded into the
 // interpolator, two stay queued.
 std::vector<seg::Words> dwells(int n) {
