@@ -304,7 +304,8 @@ module mc_regs #(
   reg        w_act;  // the walker is issuing reads
   wire       w_wr;  // the walker writes a telemetry word this clock
   reg        val_shadow;  // the reply value comes from sq, not q
-  reg  [31:0] val;  // reply value when it comes from neither (writes, PID reads)
+  // val_direct: the reply value is data, the frame's own value (a write's
+  // echo), or what replaced it: a PID register read, or 0 for a refusal.
   reg        val_direct;
   reg  [1:0] set_n;  // X_SET: the axis whose position is read next
   wire       rep_busy = rep_pend | rep_sending;
@@ -519,7 +520,7 @@ module mc_regs #(
           if (chk == P_ST_BAD_LEN || chk == P_ST_BAD_CMD || chk == P_ST_FULL) begin
             cnt_nak_inc <= 1'b1;
             val_direct  <= 1'b1;
-            val         <= 32'd0;
+            data        <= 32'd0;
             xs          <= X_REPLY;
           end else if (chk == P_ST_DUP) begin  // a repeated segment frame
             cnt_dup_inc <= 1'b1;
@@ -548,7 +549,7 @@ module mc_regs #(
             status      <= P_ST_BAD_REG;
             cnt_nak_inc <= 1'b1;
             val_direct  <= 1'b1;
-            val         <= 32'd0;
+            data        <= 32'd0;
             xs          <= X_REPLY;
           end else begin
             if (dup) begin
@@ -560,7 +561,6 @@ module mc_regs #(
             end
             if (f_cmd == P_CMD_WRITE) begin
               val_direct <= 1'b1;
-              val        <= data;
               xs         <= dup ? X_REPLY : (is_pid ? X_PIDW : X_APPLY);
             end else begin
               val_shadow <= ~is_pid & rd_shadow;
@@ -590,7 +590,7 @@ module mc_regs #(
         X_PIDRW:
         if (pid_rvalid_i) begin
           val_direct <= 1'b1;
-          val        <= pid_rdata_i;
+          data       <= pid_rdata_i;
           xs         <= X_REPLY;
         end
         X_RD: if (rd_free) xs <= X_RD1;
@@ -624,7 +624,7 @@ module mc_regs #(
   wire x_wr = xs == X_RD2 || (xs == X_REPLY && !w_wr);
   assign tx_we_o    = w_wr | x_wr;
   assign tx_waddr_o = w_wr ? w_ptr : 4'd0;
-  assign tx_wdata_o = (w_wr || !(val_direct || val_shadow)) ? qv : (val_direct ? val : sq);
+  assign tx_wdata_o = (w_wr || !(val_direct || val_shadow)) ? qv : (val_direct ? data : sq);
 
   // ---------------------------------------------------------------------
   // Walker: after each sample, TLM_HDR then each axis's POS, CMD, ERR, OUT
