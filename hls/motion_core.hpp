@@ -82,6 +82,11 @@ class MotionCore {
   using Out = MotionOut<NAXES>;
   using Pid = PidCoreClocked<NAXES>;
   static constexpr int latency = Pid::latency;
+  // The sweep clock (Pid::sweep_clock) in which pid_core streams axis a's
+  // output word, which the drive takes at that clock's edge: slot a + 1,
+  // cycle 10 of rtl/pid_core.v's schedule, 18 cycles a slot.
+  static constexpr int drv_clock(int a) { return 1 + 18 * (a + 1) + 10; }
+  static_assert(drv_clock(NAXES - 1) < latency, "the last drive update precedes done");
   static constexpr int pwm_bits = PWM_BITS;
 
   // PWM duty, in counter steps of 2^PWM_BITS, of a drive value.
@@ -159,7 +164,7 @@ class MotionCore {
       }
       if (in.drv_ovr_we[a])
         n.drv_cmd[a] = in.drv_ovr_val;
-      else if (done && !in.drv_ovr[a])
+      else if (pid_.sweep_clock() == drv_clock(a) && !in.drv_ovr[a])
         n.drv_cmd[a] = int16_t(pid_.core().u(a));
       if (done) n.smp_sat[a] = pid_.core().sat(a);
     }

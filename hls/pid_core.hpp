@@ -240,6 +240,9 @@ class PidCoreClocked {
   bool rvalid() const { return rvalid_; }
   uint32_t rdata() const { return rdata_; }
   bool enabled(int a) const { return core_.read(uint8_t(a << 4 | pid_reg::CTRL)) & 1; }
+  // Clocks since the tick in the current clock during a sweep (1 in the
+  // clock after the tick, latency in done's), else 0.
+  int sweep_clock() const { return run_ ? latency - left_ : done_ ? latency : 0; }
   const PidCore<NAXES>& core() const { return core_; }
 
   // Fast-forward: between sweeps, with no port activity and no tick due in

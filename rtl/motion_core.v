@@ -10,10 +10,12 @@
 //   queue segments through seg_wr/seg_wdata (interp_core's port; set the
 //   position with ip_set, a strobe per axis, while the interpolator is idle).
 // - The PID samples cmd/pos at tick, for all axes at once, and the decoders
-//   take their velocity sample at the same tick. When the sweep ends (done),
-//   the sample's outputs are latched together into drv_cmd/smp_sat and reach
-//   the drive in the next clock, so every axis's drive changes in the same
-//   clock, LATENCY cycles (pid_core) + 2 after the tick.
+//   take their velocity sample at the same tick. Each axis's new output
+//   reaches drv_cmd as the sweep makes it (the sample RAM's OUT word; axis a
+//   at the edge that ends clock 29 + 18a after the tick, DRV_CLOCK in
+//   hls/motion_core.hpp) and the pins a clock later: a drive never waits for
+//   the other axes, and the axes change within 1.5 us of each other at 12
+//   MHz. smp_sat is latched at done.
 // - The sample's words per axis are kept in a block RAM of two banks: the
 //   sweep writes one while smp_raddr reads the other, and done swaps them,
 //   so a read always sees one whole sample, the last completed, from the
@@ -190,8 +192,11 @@ module motion_core #(
   endgenerate
 
   // ---------------------------------------------------------------------
-  // The loops.
+  // The loops. pid_core's u_o is unused: the drive takes u from the sample
+  // stream, and synthesis trims u_o's flip-flops.
+  /* verilator lint_off UNUSEDSIGNAL */
   wire [NAXES*16-1:0] pid_u;
+  /* verilator lint_on UNUSEDSIGNAL */
   wire [   NAXES-1:0] pid_sat;
   wire                pid_smp_we;
   /* verilator lint_off UNUSEDSIGNAL */
@@ -250,8 +255,8 @@ module motion_core #(
     if (done && !rst) pb <= ~pb;
   end
 
-  // pid_core writes each axis's outputs at a different clock of the sweep;
-  // latching them at done publishes one coherent sample. An overridden
+  // The drive takes each axis's u from the stream into the sample RAM (the
+  // OUT word), so it needs no copy of pid_core's outputs. An overridden
   // axis's drv_cmd is the host's instead: one register either way.
   always @(posedge clk) begin
     if (rst) begin
@@ -260,7 +265,8 @@ module motion_core #(
     end else begin
       for (a = 0; a < NAXES; a = a + 1) begin
         if (drv_ovr_we[a]) drv_cmd[a*16+:16] <= drv_ovr_val;
-        else if (done && !drv_ovr[a]) drv_cmd[a*16+:16] <= pid_u[a*16+:16];
+        else if (pid_smp_we && pid_smp_fld == 3'd3 && pid_smp_ax == a[3:0] && !drv_ovr[a])
+          drv_cmd[a*16+:16] <= pid_smp_wd[15:0];
       end
       if (done) smp_sat <= pid_sat;
     end

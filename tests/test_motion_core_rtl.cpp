@@ -99,7 +99,7 @@ class MotionCosim {
     check("ip_seg_cnt", 0, d.ip_seg_cnt, t.ip_seg_cnt);
     check("tick", 0, d.tick, t.tick);
     check("done", 0, d.done, t.done);
-    check("smp_rdata", 0, d.smp_rdata, t.smp_rdata);
+    check("smp_rdata", int(in_.smp_raddr), d.smp_rdata, t.smp_rdata);
     for (int a = 0; a < N; ++a) {
       check("pwm", a, d.pwm[a], t.pwm[a]);
       check("dir", a, d.dir[a], t.dir[a]);
@@ -278,8 +278,16 @@ TEST(MotionCoreRtl, DriveTimingAndDuty) {
   while (!s.twin().outputs().tick) s.cycle();
   uint64_t t0 = s.cycles_;
   s.cycle();
+  // Each axis's drive takes its output as the sweep makes it, the pins a
+  // clock after: axis 0 first, axis 1 one slot (18 clocks) later, both
+  // before the sweep's done.
   while (s.twin().outputs().drv_u[0] == 0) s.cycle();
-  EXPECT_EQ(s.cycles_ - t0, uint64_t(Twin::latency + 2));
+  EXPECT_EQ(s.cycles_ - t0, uint64_t(Twin::drv_clock(0) + 2));
+  EXPECT_EQ(s.twin().outputs().drv_u[0], 20000);
+  EXPECT_EQ(s.twin().outputs().drv_u[1], 0);
+  while (s.twin().outputs().drv_u[1] == 0) s.cycle();
+  EXPECT_EQ(s.cycles_ - t0, uint64_t(Twin::drv_clock(1) + 2));
+  EXPECT_LT(s.cycles_ - t0, uint64_t(Twin::latency + 2));
   EXPECT_EQ(s.twin().outputs().drv_u[0], 20000);
   EXPECT_EQ(s.twin().outputs().drv_u[1], -5000);
   // Over one PWM period the high clocks are the duty.
