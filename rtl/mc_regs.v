@@ -21,7 +21,8 @@
 //   one is still being sent (the sample count in TLM_HDR then shows the gap).
 // - Registers that read back what was written (RW in the table) are read
 //   from a shadow block RAM written with every register write, so their
-//   read-back costs no multiplexer; live values go through the multiplexer.
+//   read-back costs no multiplexer, and so are the constants (ID, INFO,
+//   CLK_HZ, BAUD); live values go through the multiplexer.
 //   The shadow RAM holds the reset values from configuration on.
 // - The link counters (LINK_CRC, LINK_CMD, LINK_JUNK) live in the shadow RAM
 //   too: an event marks its counter pending, and a read-modify-write of the
@@ -185,6 +186,11 @@ module mc_regs #(
     for (si = 0; si < 256; si = si + 1) shadow[si] = 32'd0;
     shadow[R_WDOG[7:0]]   = {8'd0, WDOG_RESET};
     shadow[R_SAFETY[7:0]] = B_SAFETY_DEFAULT;
+    // The constants are read from here too (never written: not writable).
+    shadow[R_ID[7:0]]     = B_ID_MAGIC | {24'd0, P_VERSION};
+    shadow[R_INFO[7:0]]   = {16'd0, P_VERSION, FIFO_AW4, NAXES4};
+    shadow[R_CLK_HZ[7:0]] = CLK32;
+    shadow[R_BAUD[7:0]]   = BAUD32;
   end
 
   // Per-axis inputs padded to four axes, so the multiplexer indexes them
@@ -214,10 +220,6 @@ module mc_regs #(
       endcase
     end else begin
       case (ra[4:0])
-        R_ID[4:0]: live = B_ID_MAGIC | {24'd0, P_VERSION};
-        R_INFO[4:0]: live = {16'd0, P_VERSION, FIFO_AW4, NAXES4};
-        R_CLK_HZ[4:0]: live = CLK32;
-        R_BAUD[4:0]: live = BAUD32;
         R_STATUS[4:0]: begin
           live[B_ST_ARMED] = armed_i;
           live[B_ST_ESTOP_IN] = estop_act_i;
@@ -283,7 +285,8 @@ module mc_regs #(
   wire       wr_ok = is_pid ? pid_ok_w : (is_glb ? R_GLOBAL_WMASK[addr[4:0]] : is_ax & R_AX_WMASK[addr[3:0]]);
   /* verilator lint_off WIDTH */
   localparam [31:0] CNT_SHADOW = (32'd1 << R_LINK_CRC[4:0]) | (32'd1 << R_LINK_CMD[4:0]) |
-                                 (32'd1 << R_LINK_JUNK[4:0]);
+                                 (32'd1 << R_LINK_JUNK[4:0]) | (32'd1 << R_ID[4:0]) |
+                                 (32'd1 << R_INFO[4:0]) | (32'd1 << R_CLK_HZ[4:0]) | (32'd1 << R_BAUD[4:0]);
   /* verilator lint_on WIDTH */
   localparam [31:0] GLB_SHADOW = R_GLOBAL_SHADOW | CNT_SHADOW;
   wire       rd_shadow = is_glb ? GLB_SHADOW[addr[4:0]] : R_AX_SHADOW[addr[3:0]];
@@ -511,9 +514,10 @@ module mc_regs #(
           bi         <= 8'd0;
           val_direct <= 1'b0;
           val_shadow <= 1'b0;
-          if (f_cmd == P_CMD_PING) begin
+          if (f_cmd == P_CMD_PING) begin  // answered with ID, from the shadow RAM
             last_valid <= 1'b0;
             addr       <= R_ID;
+            val_shadow <= 1'b1;
           end else if (f_cmd == P_CMD_SEG) begin
             addr <= R_IP_STAT;
           end

@@ -188,7 +188,10 @@ TEST(BoardRtl, DuplicateFrameIsAnsweredButNotAppliedTwice) {
   EXPECT_EQ(tb.read(br::IP_SET_X), 5u);
   EXPECT_EQ(tb.read(br::LINK_CMD) >> 16, 2u);
   // PING starts a session: the last SEQ is forgotten.
-  EXPECT_EQ(tb.transact(hp::ping(0))->status, bp::ST_OK);
+  const auto pong = tb.transact(hp::ping(0));
+  ASSERT_TRUE(pong);
+  EXPECT_EQ(pong->status, bp::ST_OK);
+  EXPECT_EQ(pong->value, bb::ID_MAGIC | bp::VERSION) << "PING answers with ID";
   EXPECT_EQ(tb.transact(w)->status, bp::ST_OK);
 }
 
