@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Map one rtl/ module to the iCE40UP5K with Yosys (synth_ice40, DSP inference
-# on) and print its resource use. Fails if Yosys reports an error or warns
-# about latches or multiple drivers, or if the module does not fit the device.
+# Map one rtl/ module to the iCE40UP5K with Yosys (synth_ice40 -dsp -abc9
+# -dff, as scripts/synth.sh does) and print its resource use. Fails if Yosys
+# reports an error or warns about latches or multiple drivers, or if the
+# module does not fit the device.
 # usage: synth_check.sh <module> <workdir> [--pnr]
 #   --pnr  also run nextpnr and print (informational, never fails the check):
 #          - the packed logic-cell count of the module alone;
@@ -19,7 +20,7 @@ pnr="${3:-}"
 rtl="$(cd "$(dirname "$0")/../rtl" && pwd)"
 mkdir -p "$work"
 log="$work/$top.yosys.log"
-yosys -q -l "$log" -p "read_verilog -I$rtl $rtl/*.v; synth_ice40 -dsp -top $top -json $work/$top.json; tee -o $work/$top.stat.txt stat" >/dev/null
+yosys -q -l "$log" -p "read_verilog -I$rtl $rtl/*.v; synth_ice40 -dsp -abc9 -dff -top $top -json $work/$top.json; tee -o $work/$top.stat.txt stat" >/dev/null
 # A latch, a net with two drivers, or any Yosys warning fails the check.
 if grep -E "^Latch inferred|conflicting drivers|^Warning:|^ERROR" "$log" >&2; then
   echo "synth_check: $top: Yosys reported the problems above" >&2
@@ -67,7 +68,7 @@ awk -v top="$top" '
     print "  end"
     printf "  %s dut (\n%s  );\nendmodule\n", top, conn
   }' "$work/$top.ports.v" >"$harness"
-yosys -q -l "$work/${top}_pins.yosys.log" -p "read_verilog -I$rtl $rtl/*.v $harness; synth_ice40 -dsp -top synth_check_pins -json $work/${top}_pins.json" >/dev/null
+yosys -q -l "$work/${top}_pins.yosys.log" -p "read_verilog -I$rtl $rtl/*.v $harness; synth_ice40 -dsp -abc9 -dff -top synth_check_pins -json $work/${top}_pins.json" >/dev/null
 nextpnr-ice40 --up5k --package sg48 --json "$work/${top}_pins.json" --pcf-allow-unconstrained --freq 12 \
   >"$work/${top}_pins.nextpnr.log" 2>&1 || true
 fmax=$(grep -E "Max frequency for clock" "$work/${top}_pins.nextpnr.log" | tail -1 | sed -E 's/.*: ([0-9.]+ MHz.*)$/\1/')
