@@ -61,7 +61,9 @@ constexpr uint32_t ones(int w) {
   return uint32_t((uint64_t(1) << w) - 1);
 }
 
-template <int FILT_W = 8, int ERR_W = 16, int VEL_W = 32, int AGE_W = 16>
+// IDX_RAM: the RTL's IDX_RAM parameter (the index latch in block RAM: its
+// output a clock later, not reset).
+template <int FILT_W = 8, int ERR_W = 16, int VEL_W = 32, int AGE_W = 16, bool IDX_RAM = false>
 class QuadDecoder {
   static_assert(FILT_W >= 1 && FILT_W <= 16, "quad_decoder: FILT_W must be 1..16");
   static_assert(ERR_W >= 2 && ERR_W <= 32, "quad_decoder: ERR_W must be 2..32");
@@ -127,10 +129,17 @@ class QuadDecoder {
     // Reset, then load, then the index clear, then counting.
     n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
 
-    if (in.rst)
+    if constexpr (IDX_RAM) {
+      n.idx_pos_o = r_.idx_mem[r_.idx_w];
+      if (idx_hit && !in.rst) {
+        n.idx_mem[!r_.idx_w] = pos_cnt;
+        n.idx_w = !r_.idx_w;
+      }
+    } else if (in.rst) {
       n.idx_pos_o = 0;
-    else if (idx_hit)
+    } else if (idx_hit) {
       n.idx_pos_o = pos_cnt;
+    }
 
     if (in.rst) {
       n.idx_armed_o = false;
@@ -191,7 +200,8 @@ class QuadDecoder {
     const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
     return !in.rst && !in.pos_load && !in.idx_arm && !in.idx_disarm && !in.err_clr && !in.sample &&
            pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 && r_.cnt[1] == 0 &&
-           r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise;
+           r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
+           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   void skip(uint32_t n) {
     r_.fwd = fwd_now(false);  // what every quiet clock registers
@@ -230,6 +240,8 @@ class QuadDecoder {
     uint32_t oth = 0;                                              // 2 bits
     uint32_t pos_o = 0;
     uint32_t idx_pos_o = 0;
+    uint32_t idx_mem[2] = {};  // IDX_RAM only
+    bool idx_w = false;
     bool idx_armed_o = false;
     bool idx_seen_o = false;
     bool err_o = false;

@@ -273,7 +273,8 @@ module mc_board #(
       .NAXES   (NAXES),
       .FIFO_AW (FIFO_AW),
       .PWM_BITS(PWM_BITS),
-      .FILT_W  (FILT_W)
+      .FILT_W  (FILT_W),
+      .IDX_RAM (1)  // 96 flip-flops fewer for three axes
   ) u_core (
       .clk             (clk),
       .rst             (rst),

@@ -43,7 +43,8 @@ module motion_core #(
     parameter integer NAXES    = 3,  // axes, 1..3 (the interpolator moves three)
     parameter integer FIFO_AW  = 9,  // log2 of the segment queue depth in words
     parameter integer PWM_BITS = 9,  // PWM period 2^PWM_BITS clocks, duty resolution
-    parameter integer FILT_W   = 8   // encoder glitch filter length width, bits
+    parameter integer FILT_W   = 8,  // encoder glitch filter length width, bits
+    parameter integer IDX_RAM  = 0   // the decoders' index latches in block RAM (quad_decoder)
 ) (
     // clock and reset
     input  wire                  clk,
@@ -157,9 +158,10 @@ module motion_core #(
     for (g = 0; g < NAXES; g = g + 1) begin : g_enc
       /* verilator lint_off PINCONNECTEMPTY */
       quad_decoder #(
-          .FILT_W(FILT_W),
-          .ERR_W (16),
-          .VEL_W (32)
+          .FILT_W (FILT_W),
+          .ERR_W  (16),
+          .VEL_W  (32),
+          .IDX_RAM(IDX_RAM)
       ) u_dec (
           .clk           (clk),
           .rst           (rst),

@@ -22,6 +22,10 @@
 //   position (this clock's edge included) into idx_pos_o, sets idx_seen_o and
 //   drops idx_armed_o. With idx_clr_en_i high, that same position becomes 0.
 //   idx_disarm_i cancels an armed latch; arming clears idx_seen_o.
+//   With IDX_RAM = 1 the latched position lives in block RAM instead of 32
+//   flip-flops: idx_pos_o then follows a clock later (the RAM's output
+//   register) and reset leaves it as it was; idx_seen_o says whether it is
+//   valid. (The board, short of logic cells, builds it so.)
 // - err_o (sticky) and err_cnt_o (saturating) report quadrature errors: the
 //   filtered A and B changed in the same clock (not counted), or a filter
 //   discarded a pulse on one channel during which the other channel moved
@@ -39,7 +43,8 @@ module quad_decoder #(
     parameter integer FILT_W = 8,   // filter length input width, bits (clocks up to 2^FILT_W-1)
     parameter integer ERR_W  = 16,  // error counter width, bits (saturates)
     parameter integer VEL_W  = 32,  // velocity width, bits (counts per sample, saturates)
-    parameter integer AGE_W  = 16   // edge age width, bits (clocks, saturates)
+    parameter integer AGE_W  = 16,  // edge age width, bits (clocks, saturates)
+    parameter integer IDX_RAM = 0   // 1: the index latch in block RAM (see above)
 ) (
     // clock and reset
     input  wire              clk,
@@ -187,10 +192,33 @@ module quad_decoder #(
 
   // The latched position is the one that becomes 0 with idx_clr_en_i, so
   // idx_pos_o is exactly the offset between the old and the new count.
-  always @(posedge clk) begin
-    if (rst) idx_pos_o <= 32'd0;
-    else if (idx_hit) idx_pos_o <= pos_cnt;
-  end
+  generate
+    if (IDX_RAM != 0) begin : g_idx_ram
+      // Two words written in turn, the output reading the newer: a memory
+      // of one word at a constant address would be folded into flip-flops.
+      reg idx_w;
+      (* ram_style = "block" *)
+      reg [31:0] idx_mem[0:1];
+      initial begin
+        idx_mem[0] = 32'd0;
+        idx_mem[1] = 32'd0;
+        idx_w      = 1'b0;
+        idx_pos_o  = 32'd0;
+      end
+      always @(posedge clk) begin
+        if (idx_hit && !rst) begin
+          idx_mem[~idx_w] <= pos_cnt;
+          idx_w           <= ~idx_w;
+        end
+        idx_pos_o <= idx_mem[idx_w];
+      end
+    end else begin : g_idx_ff
+      always @(posedge clk) begin
+        if (rst) idx_pos_o <= 32'd0;
+        else if (idx_hit) idx_pos_o <= pos_cnt;
+      end
+    end
+  endgenerate
 
   // An index edge uses the arm it finds: arming in the same clock neither
   // helps nor hurts, and a disarm arrives too late to stop it.

@@ -22,6 +22,7 @@ namespace mc::test {
 // with the same -G values).
 using QuadDefault = QuadDecoder<>;
 using QuadSmall = QuadDecoder<5, 2, 4, 4>;
+using QuadIdxRam = QuadDecoder<4, 16, 32, 16, true>;  // the board's build
 
 inline uint64_t env_count(const char* name, uint64_t dflt) {
   const char* v = std::getenv(name);

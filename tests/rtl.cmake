@@ -15,6 +15,10 @@ mc_verilate(vquad_decoder TOP quad_decoder SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 mc_verilate(vquad_decoder_small TOP quad_decoder PREFIX Vquad_decoder_small
   PARAMS -GFILT_W=5 -GERR_W=2 -GVEL_W=4 -GAGE_W=4
   SOURCES ${MC_RTL_DIR}/quad_decoder.v)
+# The index latch in block RAM, as the board builds it: mc::test::QuadIdxRam.
+mc_verilate(vquad_decoder_idxram TOP quad_decoder PREFIX Vquad_decoder_idxram
+  PARAMS -GFILT_W=4 -GIDX_RAM=1
+  SOURCES ${MC_RTL_DIR}/quad_decoder.v)
 
 # Twin-only tests.
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
@@ -32,7 +36,7 @@ target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_host vinterp_core)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
 mc_gtest(test_quad_decoder_rtl rtl test_quad_decoder_rtl.cpp)
-target_link_libraries(test_quad_decoder_rtl PRIVATE mc_hls vquad_decoder vquad_decoder_small)
+target_link_libraries(test_quad_decoder_rtl PRIVATE mc_hls vquad_decoder vquad_decoder_small vquad_decoder_idxram)
 # The max-count-rate table of docs/encoder.md, and its assertions.
 mc_gtest(test_quad_rate_rtl rtl test_quad_rate_rtl.cpp)
 target_link_libraries(test_quad_rate_rtl PRIVATE mc_hls vquad_decoder)

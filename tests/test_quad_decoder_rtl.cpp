@@ -7,6 +7,7 @@
 #include <random>
 
 #include "Vquad_decoder.h"
+#include "Vquad_decoder_idxram.h"
 #include "Vquad_decoder_small.h"
 #include "quad_cosim.hpp"
 #include "quad_properties.hpp"
@@ -16,6 +17,7 @@ namespace {
 
 using QuadCosim = QuadCosimT<Vquad_decoder, QuadDefault>;
 using QuadCosimSmall = QuadCosimT<Vquad_decoder_small, QuadSmall>;
+using QuadCosimIdxRam = QuadCosimT<Vquad_decoder_idxram, QuadIdxRam>;
 
 using CosimSims = ::testing::Types<QuadCosim, QuadCosimSmall>;
 INSTANTIATE_TYPED_TEST_SUITE_P(Rtl, QuadProperties, CosimSims);
@@ -124,6 +126,12 @@ TEST(QuadRtl, RandomBitExact) {
 
 TEST(QuadRtl, RandomBitExactSmallWidths) {
   random_bit_exact<QuadCosimSmall>(env_count("MC_QUAD_RTL_CYCLES", 2000000) / 4, env_count("MC_SEED", 7));
+}
+
+// The board's build: the index latch in block RAM (a clock later, kept
+// through reset), and the filter lengths it has.
+TEST(QuadRtl, RandomBitExactIndexInBlockRam) {
+  random_bit_exact<QuadCosimIdxRam>(env_count("MC_QUAD_RTL_CYCLES", 2000000) / 2, env_count("MC_SEED", 11));
 }
 
 }  // namespace
