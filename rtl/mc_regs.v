@@ -641,22 +641,29 @@ module mc_regs #(
   reg        w_tlm_busy;  // from its start until the frame is handed over
   reg  [3:0] w_ptr;  // next telemetry word in link_tx's RAM
   reg  [1:0] done_d;
-  reg  [15:0] tlm_cnt, tlm_decim;
+  reg  [15:0] tlm_left, tlm_decim;  // samples until the next frame is due, counting this one
   reg  [2:0] tlm_axes;
   reg        tlm_due_l;
-  wire       tlm_due = tlm_decim != 16'd0 && tlm_cnt + 16'd1 >= tlm_decim;
+  // A down-count to 1 needs no comparator: the long path a count up to the
+  // decimation had (docs/board.md, Fmax).
+  wire       tlm_due = tlm_decim != 16'd0 && tlm_left[15:1] == 15'd0;
   wire       w_start = done_d[1];  // the sample RAM swaps the clock after done
   wire       w_last = !w_hdr && w_k == 3'd4 && {2'd0, w_a} == NAXES4 - 4'd1;
   wire       tlm_free = !(tlm_pend || tlm_sending || w_tlm_busy);
 
-  // TLM register (also in the shadow RAM for read-back).
+  // TLM register (also in the shadow RAM for read-back). Writing it restarts
+  // the decimation: the first frame follows DECIM samples later.
   always @(posedge clk) begin
     if (rst) begin
       tlm_decim <= 16'd0;
       tlm_axes  <= 3'd0;
+      tlm_left  <= 16'd0;
     end else if (w_glb && addr[4:0] == R_TLM[4:0]) begin
       tlm_decim <= data[B_T_DECIM_LSB+:16];
       tlm_axes  <= data[B_T_AXES_LSB+:3];
+      tlm_left  <= data[B_T_DECIM_LSB+:16];
+    end else if (done_i) begin
+      tlm_left <= (tlm_decim == 16'd0 || tlm_due) ? tlm_decim : tlm_left - 16'd1;
     end
   end
 
@@ -667,10 +674,8 @@ module mc_regs #(
     if (rst) begin
       done_d     <= 2'd0;
       sample_cnt <= 16'd0;
-      tlm_cnt    <= 16'd0;
     end else if (done_i) begin
       sample_cnt <= sample_cnt + 16'd1;
-      tlm_cnt    <= (tlm_decim == 16'd0 || tlm_due) ? 16'd0 : tlm_cnt + 16'd1;
     end
   end
 

@@ -398,6 +398,40 @@ TEST(BoardRtl, IndexLatchesThePosition) {
   EXPECT_EQ(int32_t(tb.read(ax(0, br::AX_IDX))), -13);
 }
 
+// TLM.decim = N: a frame every N-th sample, the first N samples after the
+// write, with only the axes asked for; 0 stops them.
+TEST(BoardRtl, TelemetryDecimation) {
+  BoardTb tb;
+  constexpr long kTs = 5000;  // a one-axis frame (27 bytes) fits in a period
+  tb.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), kTs);
+  for (uint32_t n : {1u, 3u, 7u}) {
+    tb.telemetry().clear();
+    const uint32_t before = tb.read(br::TLM_HDR) & 0xFFFF;
+    tb.write(br::TLM, n | 2u << bb::T_AXES_LSB);  // axis Y only
+    tb.run(kTs * 40);
+    tb.write(br::TLM, 0);
+    auto& f = tb.telemetry();
+    ASSERT_GE(f.size(), size_t(40 / n - 2)) << n;
+    std::optional<uint16_t> last;
+    for (const auto& fr : f) {
+      const auto t = hp::parse_telemetry(fr, 2);
+      ASSERT_EQ(t.axes.size(), 1u);
+      if (last) {
+        EXPECT_EQ(uint16_t(t.sample - *last), n) << "decimation " << n;
+      }
+      last = t.sample;
+    }
+    // The write's reply leaves within a sample of the write, so the first
+    // frame is the N-th or N+1-th sample after the sample count read before.
+    const auto first = hp::parse_telemetry(f.front(), 2).sample;
+    EXPECT_LE(uint16_t(first - before), n + 2) << n;
+    tb.run(kTs);  // a frame already prepared still goes out
+    tb.telemetry().clear();
+    tb.run(kTs * 10);
+    EXPECT_TRUE(tb.telemetry().empty()) << "TLM 0 stops the frames";
+  }
+}
+
 // The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads
 // back as written and acts as 15, never as its low bits (16 would be 0).
 // Seen through the index latch: a Z pulse arms nothing unless it passes.
