@@ -233,7 +233,6 @@ module pid_core #(
   // datapath's selects come straight from flip-flops.
   wire [4:0]     cy_n = (~run || cy == LAST_CY) ? 5'd0 : cy + 5'd1;
   wire           run_n = run ? ~last : tick_o;
-  wire [SLW-1:0] sl_n = ~run ? {SLW{1'b0}} : (cy == LAST_CY) ? sl + 1'b1 : sl;
 
   // One microword per slot cycle:
   // {front op, front RAM read, front RAM write cmd, write e (and err_o),
@@ -355,9 +354,12 @@ module pid_core #(
 
   // Enable of an axis by slot number (slot NAXES and the wrap of 0-1 have none).
   wire [(1<<SLW)-1:0] en_pad = {{((1 << SLW) - NAXES) {1'b0}}, en};
-  // The back ALU's axis next cycle (registered use: the zero force).
-  wire [SLW-1:0]      ba_ax_n = (cy_n >= 5'd14) ? sl_n : sl_n - 1'b1;
-  wire                ba_en_n = en_pad[ba_ax_n];
+  // The back ALU's axis next cycle (registered use: the zero force): slot
+  // sl's own axis from cycle 14 of the slot to cycle 0 of the next, i.e. when
+  // this cycle is 13 to 17, the previous slot's before; none between sweeps.
+  // Decided from this cycle's registers, not from cy_n and sl_n: that chain
+  // was the board's longest path.
+  wire                ba_en_n = run & ((cy >= 5'd13) ? en_pad[sl] : en_pad[slp]);
 
   // Read-back: RAM words come from cq one cycle later; the rest from flops.
   reg [3:0] r_ax, r_rg;
