@@ -128,6 +128,9 @@ module pid_core #(
     if (NAXES < 1 || NAXES > 15) begin
       $error("pid_core: NAXES must be 1..15");
     end
+    if (AXIS_CYCLES != 18) begin
+      $error("pid_core: the cy_n table and the microcode are written for 18 cycles a slot");
+    end
     if (DSH < 1 || DSH + 32 > W || MC_OUT_W != 16 || MC_MUL_X_W != 32) begin
       $error("pid_core: the datapath is laid out for the formats of mc_fixed.vh");
     end
@@ -231,7 +234,33 @@ module pid_core #(
 
   // The table is looked up for the next cycle and registered, so the
   // datapath's selects come straight from flip-flops.
-  wire [4:0]     cy_n = (~run || cy == LAST_CY) ? 5'd0 : cy + 5'd1;
+  // cy_n as a table of cy, not an adder: the microcode table below then
+  // merges with it into two or three LUT levels, where a carry chain in
+  // front of it made the board's longest path.
+  reg  [4:0]     cy_n;
+  always @(*) begin
+    case (cy)
+      5'd0: cy_n = 5'd1;
+      5'd1: cy_n = 5'd2;
+      5'd2: cy_n = 5'd3;
+      5'd3: cy_n = 5'd4;
+      5'd4: cy_n = 5'd5;
+      5'd5: cy_n = 5'd6;
+      5'd6: cy_n = 5'd7;
+      5'd7: cy_n = 5'd8;
+      5'd8: cy_n = 5'd9;
+      5'd9: cy_n = 5'd10;
+      5'd10: cy_n = 5'd11;
+      5'd11: cy_n = 5'd12;
+      5'd12: cy_n = 5'd13;
+      5'd13: cy_n = 5'd14;
+      5'd14: cy_n = 5'd15;
+      5'd15: cy_n = 5'd16;
+      5'd16: cy_n = 5'd17;
+      default: cy_n = 5'd0;  // LAST_CY (17): the next slot
+    endcase
+    if (~run) cy_n = 5'd0;
+  end
   wire           run_n = run ? ~last : tick_o;
 
   // One microword per slot cycle:
