@@ -26,8 +26,9 @@
 //   The shadow RAM holds the reset values from configuration on.
 // - The link counters (LINK_CRC, LINK_CMD, LINK_JUNK) live in the shadow RAM
 //   too: an event marks its counter pending, and a read-modify-write of the
-//   word adds it when the RAM's ports are free (within some 20 clocks; events
-//   of one counter are a byte time, 120 clocks, apart or more). Being block
+//   word adds it when the RAM's ports are free (within about 40 clocks: the
+//   walker's reads, the other counters, one retry; events of one counter are
+//   a byte time, 120 clocks, apart or more). Being block
 //   RAM, they count from configuration: reset does not clear them.
 `default_nettype none
 

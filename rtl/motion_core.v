@@ -14,8 +14,8 @@
 //   reaches drv_cmd as the sweep makes it (the sample RAM's OUT word; axis a
 //   at the edge that ends clock 29 + 18a after the tick, DRV_CLOCK in
 //   hls/motion_core.hpp) and the pins a clock later: a drive never waits for
-//   the other axes, and the axes change within 1.5 us of each other at 12
-//   MHz. smp_sat is latched at done.
+//   the other axes, and the axes change 18 clocks apart (1.5 us at 12 MHz;
+//   X to Z 3 us). smp_sat is latched at done.
 // - The sample's words per axis are kept in a block RAM of two banks: the
 //   sweep writes one while smp_raddr reads the other, and done swaps them,
 //   so a read always sees one whole sample, the last completed, from the
@@ -28,7 +28,8 @@
 //   pins low in the next clock, whatever the PID does. drv_ovr hands an axis's
 //   drive to the host instead of the PID (the host-loop mode): done then
 //   leaves its drv_cmd alone, and drv_ovr_we loads it with drv_ovr_val. When
-//   drv_ovr falls, the host's last value holds until the PID's next done.
+//   drv_ovr falls, the host's last value holds until the PID's next output
+//   for the axis (at most a sample period and drv_clock later).
 // - PWM: a free-running PWM_BITS counter; the duty is the magnitude of
 //   drv_u in steps of 2^(15-PWM_BITS) drive units, so full scale is always
 //   on; dir_o gives the sign. drv_en_o enables the bridge for an axis whose

@@ -18,9 +18,9 @@
 #              Yosys run; it does not affect the bitstream)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-# ABC9 with flip-flops in its scope maps the three-axis board in about 90
+# ABC9 with flip-flops in its scope maps the three-axis board in about 150
 # fewer logic cells than the default ABC pass; at 99 % of the device the
-# default netlist does not route, at 96 % this one does (docs/board.md).
+# default netlist did not route, at 95 % this one does (docs/board.md).
 yosys_flags="-dsp -abc9 -dff"
 out="${1:-$root/build/synth}"
 mode="${2:-}"

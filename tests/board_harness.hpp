@@ -78,10 +78,14 @@ class BoardTb {
     tx_.send(b);
     while (!tx_.idle()) clock();
   }
-  // Sends a frame; returns the reply to it, or nothing after the timeout.
-  std::optional<hp::Reply> transact(const hp::Frame& req, long timeout = kReplyTimeout) {
+  // Sends a frame (then the trailing bytes, which arrive while the board
+  // works on it); returns the reply to it, or nothing after the timeout.
+  std::optional<hp::Reply> transact(const hp::Frame& req, long timeout = kReplyTimeout,
+                                    const hp::Bytes& trailing = {}) {
     replies_.clear();
-    send_raw(hp::encode(req));
+    hp::Bytes b = hp::encode(req);
+    b.insert(b.end(), trailing.begin(), trailing.end());
+    send_raw(b);
     for (long i = 0; i < timeout; ++i) {
       clock();
       if (!replies_.empty()) {

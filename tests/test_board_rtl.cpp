@@ -158,6 +158,35 @@ TEST(BoardRtl, LinkCountersSaturate) {
   EXPECT_EQ(tb.read(br::LINK_CRC), 0u) << "a neighbouring counter moved";
 }
 
+// Counter events arriving while register reads use the same RAM (junk bytes
+// and bad-CRC frames right behind each read, telemetry every sample): every
+// event counts once, in its own counter.
+TEST(BoardRtl, LinkCountersStayExactUnderReads) {
+  BoardTb tb;
+  tb.write(br::TLM, 1u | 1u << bb::T_AXES_LSB);
+  hp::Bytes bad = hp::encode(hp::read(200, br::ID));
+  bad.back() ^= 0x5A;  // a wrong CRC
+  uint32_t junk = 0, crc_bad = 0, last = 0;
+  for (int i = 0; i < 60; ++i) {
+    hp::Bytes trailing(size_t(1 + i % 7), 0x00);
+    if (i % 3 == 0) trailing.insert(trailing.end(), bad.begin(), bad.end());
+    auto r = tb.transact(hp::read(tb.next_seq(), br::LINK_JUNK), kReplyTimeout, trailing);
+    ASSERT_TRUE(r);
+    EXPECT_GE(r->value, last);
+    EXPECT_LE(r->value, junk + uint32_t(trailing.size()));
+    last = r->value;
+    junk += uint32_t(1 + i % 7);
+    crc_bad += i % 3 == 0;
+  }
+  tb.run(5000);
+  tb.write(br::TLM, 0);
+  EXPECT_EQ(tb.read(br::LINK_JUNK), junk);
+  const uint32_t link = tb.read(br::LINK_CRC);
+  EXPECT_EQ(link & 0xFFFF, crc_bad);
+  EXPECT_EQ(link >> 16, 0u) << "no framing error";
+  EXPECT_EQ(tb.read(br::LINK_CMD), 0u) << "nothing refused, no duplicate";
+}
+
 // Three dwell segments of a long duration: the first is loaded into the
 // interpolator, two stay queued.
 std::vector<seg::Words> dwells(int n) {
@@ -424,12 +453,46 @@ TEST(BoardRtl, TelemetryDecimation) {
     // The write's reply leaves within a sample of the write, so the first
     // frame is the N-th or N+1-th sample after the sample count read before.
     const auto first = hp::parse_telemetry(f.front(), 2).sample;
+    EXPECT_GE(uint16_t(first - before), n) << n;
     EXPECT_LE(uint16_t(first - before), n + 2) << n;
     tb.run(kTs);  // a frame already prepared still goes out
     tb.telemetry().clear();
     tb.run(kTs * 10);
     EXPECT_TRUE(tb.telemetry().empty()) << "TLM 0 stops the frames";
   }
+  // Writing TLM again restarts the count: 3.5 samples into a decimation of 7,
+  // the same write puts the next frame 7 samples away, not 3.5.
+  tb.write(br::TLM, 7u | 2u << bb::T_AXES_LSB);
+  tb.run(kTs * 7 / 2);
+  tb.telemetry().clear();
+  const uint32_t before = tb.read(br::TLM_HDR) & 0xFFFF;
+  tb.write(br::TLM, 7u | 2u << bb::T_AXES_LSB);
+  tb.run(kTs * 12);
+  ASSERT_FALSE(tb.telemetry().empty());
+  EXPECT_GE(uint16_t(hp::parse_telemetry(tb.telemetry().front(), 2).sample - before), 7u);
+}
+
+// With the PID running: an override holds through samples, and after its
+// release the host's last value holds until the PID's next output.
+TEST(BoardRtl, DriveOverrideHoldsUntilThePidsNextOutput) {
+  BoardTb tb;
+  constexpr long kTs = 200000;  // long, so the release lands well inside a period
+  const uint32_t ovr = 1u << bb::D_OVR;
+  tb.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), kTs);
+  tb.write(pid_reg::addr(1, pid_reg::KP), (1u << 22) | (16u << 24));  // 64 per count
+  tb.write(pid_reg::addr(1, pid_reg::CTRL), 1);
+  tb.write(br::IP_SET_Y, 100);  // the encoder stays at 0: error 100
+  tb.write(br::IP_CTRL, 1u << bb::I_SET);
+  tb.write(br::CTRL, 1u << bb::C_ARM);
+  tb.run(kTs + 100);
+  EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 6400u) << "the PID drives: 64 x 100";
+  tb.write(ax(1, br::AX_DRV), ovr | 0x4000);
+  tb.run(2 * kTs);
+  EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), ovr | 0x4000) << "the samples leave an override alone";
+  tb.write(ax(1, br::AX_DRV), 0);
+  EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 0x4000u) << "released: the host's value holds";
+  tb.run(kTs);
+  EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 6400u) << "the PID's next output";
 }
 
 // The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads
