@@ -122,11 +122,11 @@ AxisModel axis_model(const AxisConfig& a) {
 }
 
 double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHistogram& jitter) {
-  // The board: half a period of hold, and the clocks from the tick to the
-  // last axis's pins (its drive register takes the output at drv_clock, the
-  // PWM a clock after).
-  if (!p.host)
-    return 0.5 * ts_cycles(m, p.ts_s) / m.clock_hz + (CoreTwin::drv_clock(kCoreAxes - 1) + 2) / m.clock_hz;
+  // The board: half a period of hold, and the sweep's latency plus the drive
+  // register and the PWM: a bound, as each axis's drive takes its output
+  // before the sweep ends (MotionCore::drv_clock), the last one
+  // 5 clocks earlier (LATENCY - drv_clock(NAXES - 1) for every NAXES).
+  if (!p.host) return 0.5 * ts_cycles(m, p.ts_s) / m.clock_hz + (kLatency + 2) / m.clock_hz;
   double mean = 0, n = 0;
   for (size_t i = 0; i < jitter.count.size(); ++i) {
     mean += 0.5 * (jitter.lo_s[i] + jitter.hi_s[i]) * double(jitter.count[i]);
