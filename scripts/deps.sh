@@ -10,7 +10,7 @@ PKGS=(
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   gnuplot-nox
-  clang-format clang-tidy
+  clang-format clang-tidy ccache
 )
 
 missing=()
