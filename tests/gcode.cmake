@@ -7,3 +7,6 @@ target_link_libraries(test_gcode_parse PRIVATE mc_gcode)
 mc_gtest(test_gcode_reference unit test_gcode_reference.cpp)
 target_link_libraries(test_gcode_reference PRIVATE mc_gcode)
 target_compile_definitions(test_gcode_reference PRIVATE MC_GCODE_CORPUS_DIR="${CMAKE_CURRENT_SOURCE_DIR}/gcode")
+
+mc_gtest(test_gcode_interp unit test_gcode_interp.cpp)
+target_link_libraries(test_gcode_interp PRIVATE mc_gcode)

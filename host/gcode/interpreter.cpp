@@ -594,11 +594,7 @@ class BlockExecutor {
     if (c == g(28) || c == g(30)) {
       go_home(c == g(28) ? st_.data_.g28 : st_.data_.g30);
     } else if (c == g(28, 1) || c == g(30, 1)) {
-      if (axis_words_)
-        fail(has('X')   ? 'X'
-             : has('Y') ? 'Y'
-                        : 'Z',
-             grbl::axis_words_exist, w->text + " takes no axis words: it stores the current position");
+      // Axis words on this line belong to the motion mode (step 20).
       (c == g(28, 1) ? st_.data_.g28 : st_.data_.g30) = st_.position_;
     } else if (c == g(10)) {
       set_coord_data();
@@ -615,13 +611,9 @@ class BlockExecutor {
       }
       d.g92_applied = true;
     } else if (c == g(92, 1)) {
-      if (axis_words_)
-        fail(has('X') ? 'X' : has('Y') ? 'Y' : 'Z', grbl::axis_words_exist, "G92.1 takes no axis words");
       st_.data_.g92 = Vec3{};
       st_.data_.g92_applied = true;
     } else if (c == g(92, 2) || c == g(92, 3)) {
-      if (axis_words_)
-        fail(has('X') ? 'X' : has('Y') ? 'Y' : 'Z', grbl::axis_words_exist, w->text + " takes no axis words");
       st_.data_.g92_applied = c == g(92, 3);
     }
   }

@@ -32,7 +32,7 @@ enum class SpindleState { off, clockwise, counterclockwise };  // M5, M3, M4
 using MotionCode = int;
 
 struct ModalState {
-  MotionCode motion = 10;  // G1 after power-up, as LinuxCNC (Grbl starts in G0)
+  MotionCode motion = 800;  // G80 after power-up, as LinuxCNC (Grbl starts in G0)
   Plane plane = Plane::xy;
   Units units = Units::mm;
   Distance distance = Distance::absolute;
