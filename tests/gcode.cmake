@@ -10,3 +10,6 @@ target_compile_definitions(test_gcode_reference PRIVATE MC_GCODE_CORPUS_DIR="${C
 
 mc_gtest(test_gcode_interp unit test_gcode_interp.cpp)
 target_link_libraries(test_gcode_interp PRIVATE mc_gcode)
+
+mc_gtest(test_gcode_properties unit test_gcode_properties.cpp)
+target_link_libraries(test_gcode_properties PRIVATE mc_gcode)

@@ -865,7 +865,10 @@ class BlockExecutor {
       pt.at(ax.normal) = c;
       return to_machine(pt);
     };
-    if (old_cc < r) {  // below the R plane: first up to it
+    // Program coordinates come back from machine ones through the offsets, so
+    // they carry rounding: compare to kSame where LinuxCNC compares exactly.
+    constexpr double kSame = 1e-9;
+    if (old_cc < r - kSame) {  // below the R plane: first up to it
       traverse(point(cur.at(ax.first), cur.at(ax.second), r));
       old_cc = r;
       current_cc = r;
@@ -876,9 +879,9 @@ class BlockExecutor {
       aa += aa_inc;
       bb += bb_inc;
       // Position at the higher of here and the clearance height, then down to R.
-      current_cc = std::max(current_cc, clear_cc);
+      if (current_cc < clear_cc + kSame) current_cc = clear_cc;
       traverse(point(aa, bb, current_cc));
-      if (current_cc != r) traverse(point(aa, bb, r));
+      if (std::fabs(current_cc - r) > kSame) traverse(point(aa, bb, r));
       if (motion_ == g(73) || motion_ == g(83)) {
         double depth = r - q;
         while (depth > cc) {  // LinuxCNC's loop, with its rounding
