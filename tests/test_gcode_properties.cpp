@@ -84,9 +84,16 @@ Twin random_twin(std::mt19937& rng) {
       const std::string g = std::string(plane_g(plane)) + (k == 2 ? " G2" : " G3");
       const std::string offsets =
           std::string(" ") + letters[ax.first] + mm(i1) + " " + letters[ax.second] + mm(i2);
-      abs_line = g + " X" + mm(next[0]) + " Y" + mm(next[1]) + " Z" + mm(next[2]) + offsets;
-      inc_line = g + " X" + mm(next[0] - pos[0]) + " Y" + mm(next[1] - pos[1]) + " Z" + mm(next[2] - pos[2]) +
-                 offsets;
+      abs_line = g;
+      abs_line += " X" + mm(next[0]);
+      abs_line += " Y" + mm(next[1]);
+      abs_line += " Z" + mm(next[2]);
+      abs_line += offsets;
+      inc_line = g;
+      inc_line += " X" + mm(next[0] - pos[0]);
+      inc_line += " Y" + mm(next[1] - pos[1]);
+      inc_line += " Z" + mm(next[2] - pos[2]);
+      inc_line += offsets;
     }
     t.absolute += abs_line + "\n";
     t.incremental += inc_line + "\n";
