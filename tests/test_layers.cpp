@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <regex>
 #include <string>
@@ -19,8 +20,9 @@ namespace {
 // Lowest first. Folders of one rank are peers that must not include each other.
 const std::map<std::string, int>& layers() {
   static const std::map<std::string, int> m = {
-      {"hls", 0},          {"host/base", 1}, {"host/link", 2}, {"host/motion", 3}, {"host/control", 4},
-      {"host/machine", 5}, {"sim/plant", 6}, {"sim/cosim", 7}, {"sim/vboard", 7},  {"host/cli", 8},
+      {"hls", 0},         {"host/base", 1},    {"host/gcode", 1},   {"host/link", 2},
+      {"host/motion", 3}, {"host/control", 4}, {"host/machine", 5}, {"sim/plant", 6},
+      {"sim/cosim", 7},   {"sim/vboard", 7},   {"host/cli", 8},
   };
   return m;
 }
@@ -134,4 +136,18 @@ TEST(Layers, PeersAndBareIncludesAreFound) {
   EXPECT_TRUE(std::any_of(v.begin(), v.end(), [](const std::string& s) {
     return s.find("not included by its folder path") != std::string::npos;
   }));
+}
+
+TEST(Layers, TheReadmeLayoutListsEveryFolderAndDoc) {
+  std::ifstream f(fs::path(MC_SOURCE_DIR) / "README.md");
+  const std::string readme((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const size_t a = readme.find("## Layout"), b = readme.find("\n## ", a + 1);
+  ASSERT_NE(a, std::string::npos);
+  const std::string layout = readme.substr(a, b - a);
+  for (const auto& [folder, rank] : layers())
+    EXPECT_NE(layout.find(folder + "/"), std::string::npos)
+        << folder << " is missing from the README's layout";
+  for (const auto& e : fs::directory_iterator(fs::path(MC_SOURCE_DIR) / "docs"))
+    EXPECT_NE(layout.find("docs/" + e.path().filename().string()), std::string::npos)
+        << e.path().filename() << " is not listed in the README's layout";
 }
