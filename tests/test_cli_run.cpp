@@ -23,7 +23,7 @@ namespace {
 using nlohmann::json;
 
 std::string write_program(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + name;
+  std::string path = ::testing::TempDir() + name;
   std::ofstream(path) << text;
   return path;
 }

@@ -221,7 +221,7 @@ TEST(Planner, StopDeceleratesAtTheLimitAlongThePath) {
   const Planned p = plan("G1 X100 F6000\nY100\n", c);
   // A piece in the middle of the first move's cruise.
   size_t k = 0;
-  while (p.pieces[k].seg.end[0] < 50 * 400) ++k;
+  while (p.pieces[k].seg.end[0] < int64_t(50) * 400) ++k;
   const auto tail = mc::host::stop_after(p.moves, p.pieces, k, c);
   ASSERT_FALSE(tail.empty());
   EXPECT_TRUE(tail.back().seg.seg.last);

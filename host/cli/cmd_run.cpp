@@ -27,7 +27,7 @@ namespace mc::host::cli {
 namespace {
 
 struct RunOptions {
-  std::string file, plot;
+  std::string file, plot, csv;
   bool json = false, quiet = false;
 };
 
@@ -116,9 +116,10 @@ void run_job(const RunOptions& o) {
   // are checked once the start is known, still before anything moves).
   const mc::gcode::ProgramResult checked = mc::gcode::interpret_file(o.file);
   if (!checked.ok()) throw mc::machine::ProgramErrors(checked.errors);
-  if (!o.plot.empty()) {
-    std::ofstream probe(o.plot, std::ios::app);
-    if (!probe) throw InputError("--plot", quote(o.plot), "a writable file", "cannot write");
+  for (const auto& [opt, path] : {std::pair{"--plot", o.plot}, std::pair{"--csv", o.csv}}) {
+    if (path.empty()) continue;
+    std::ofstream probe(path, std::ios::app);
+    if (!probe) throw InputError(opt, quote(path), "a writable file", "cannot write");
   }
   Board b = open_board();
   BoardLink& l = *b.link;
@@ -168,6 +169,16 @@ void run_job(const RunOptions& o) {
   if (r.stopped) disable_axes(l, axes, true);
   const mc::machine::JobReport rep = mc::machine::report(j, r, st.ts_s());
   if (!o.plot.empty()) plot_run(o.plot, j, r);
+  if (!o.csv.empty()) {
+    std::ofstream f(o.csv);
+    f << "t_s,cmd_x_mm,cmd_y_mm,cmd_z_mm,pos_x_mm,pos_y_mm,pos_z_mm\n";
+    for (const JobSample& x : r.samples) {
+      const Vec3d c = to_mm(Vec3{x.cmd[0], x.cmd[1], x.cmd[2]}, cfg),
+                  p = to_mm(Vec3{x.pos[0], x.pos[1], x.pos[2]}, cfg);
+      f << double(x.n - r.samples.front().n) * st.ts_s() << ',' << c[0] << ',' << c[1] << ',' << c[2] << ','
+        << p[0] << ',' << p[1] << ',' << p[2] << '\n';
+    }
+  }
   if (o.json) {
     nlohmann::ordered_json js;
     js["file"] = o.file;
@@ -226,6 +237,8 @@ void add_run_command(CLI::App& app) {
               "M0, M1 and M6 wait for Enter when stdin is a terminal.");
   cmd->add_option("file", o->file, "G-code program")->required()->type_name("FILE");
   cmd->add_option("--plot", o->plot, "PNG of the programmed and the measured path (needs gnuplot)")
+      ->type_name("FILE");
+  cmd->add_option("--csv", o->csv, "The telemetry samples: time, command and position per axis, mm")
       ->type_name("FILE");
   cmd->add_flag("--json", o->json, "The report as one JSON object");
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
