@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# Formal proofs of the RTL's `ifdef FORMAL` properties (docs/formal.md).
+# usage: scripts/formal.sh [-j N] [block...]     (no block: all of them)
+#
+# Each block: Yosys reads its files with -formal (FORMAL and FORMAL_TOP_<top>
+# defined) and writes an SMT-LIB2 model; yosys-smtbmc then runs
+#   1. BMC from reset for DEPTH steps (the base case),
+#   2. k-induction with the same DEPTH (the unbounded proof), unless the
+#      block is marked bmc, in which case step 1 is the whole result,
+#   3. cover: every cover statement must be reached within CDEPTH steps.
+# One line per block: PASS/FAIL, mode, depths, seconds. Exit status 1 if any
+# block fails, 2 on a usage error. Logs, models and traces (VCD of any failed
+# step) are kept in $FORMAL_DIR/<block>/ (default build/formal); with
+# FORMAL_TRACES=1 also a VCD of each cover's trace.
+# The solver is z3 (FORMAL_SOLVER overrides); the model is written with one
+# bit-vector per state (-stbv), so the solver sees QF_BV and bit-blasts.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+rtl="$root/rtl"
+outdir="${FORMAL_DIR:-$root/build/formal}"
+solver="${FORMAL_SOLVER:-z3}"
+
+# block: top | files (repo-relative) | yosys commands before prep | mode | DEPTH | CDEPTH
+declare -A CFG
+CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||prove|10|90"
+ORDER=(crc16_ccitt)
+
+jobs=1
+if [ "${1:-}" = "-j" ]; then
+  jobs="${2:?-j needs a number}"
+  shift 2
+fi
+blocks=("$@")
+[ ${#blocks[@]} -eq 0 ] && blocks=("${ORDER[@]}")
+for b in "${blocks[@]}"; do
+  if [ -z "${CFG[$b]:-}" ]; then
+    echo "formal.sh: no block '$b' (blocks: ${ORDER[*]})" >&2
+    exit 2
+  fi
+done
+for tool in yosys yosys-smtbmc "$solver"; do
+  if ! command -v "$tool" >/dev/null 2>&1; then
+    echo "formal.sh: $tool not found (scripts/deps.sh installs it)" >&2
+    exit 2
+  fi
+done
+
+# Run one block; print its line; return 0 on PASS.
+run_block() {
+  local b="$1" top files pre mode depth cdepth
+  IFS='|' read -r top files pre mode depth cdepth <<<"${CFG[$b]}"
+  local work="$outdir/$b"
+  rm -rf "$work"
+  mkdir -p "$work"
+  local t0 paths="" f
+  t0=$(date +%s.%N)
+  for f in $files; do paths="$paths $root/$f"; done
+  local smt=(yosys-smtbmc -s "$solver" --logic QF_BV --noprogress)
+  local what="" ok=1 ctrace=()
+  # Cover traces take longer to write than to find: only on request. The
+  # asserts along them are not checked again (--noinfo): steps 1-2 prove them.
+  [ -n "${FORMAL_TRACES:-}" ] && ctrace=(--dump-vcd "$work/cover%.vcd")
+  if ! yosys -q -l "$work/yosys.log" -p "read_verilog -formal -D FORMAL -D FORMAL_TOP_$top -I$rtl $paths; $pre prep -top $top; async2sync; dffunmap; write_smt2 -stbv -wires $work/model.smt2" >/dev/null 2>&1; then
+    ok=0; what="yosys failed (see $work/yosys.log)"
+  elif ! "${smt[@]}" --presat -t "$depth" --dump-vcd "$work/bmc.vcd" "$work/model.smt2" >"$work/bmc.log" 2>&1; then
+    ok=0; what="BMC failed within $depth steps ($work/bmc.log, bmc.vcd)"
+  elif [ "$mode" = prove ] && ! "${smt[@]}" -i -t "$depth" --dump-vcd "$work/induction.vcd" "$work/model.smt2" >"$work/induction.log" 2>&1; then
+    ok=0; what="induction failed at depth $depth ($work/induction.log, induction.vcd)"
+  elif ! "${smt[@]}" --noinfo -c -t "$cdepth" "${ctrace[@]}" "$work/model.smt2" >"$work/cover.log" 2>&1; then
+    ok=0; what="cover failed within $cdepth steps ($work/cover.log)"
+  fi
+  local secs ncov reached
+  secs=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+  if [ $ok -eq 1 ]; then
+    ncov=$(grep -c "yosys-smt2-cover" "$work/model.smt2" || true)
+    reached=$(grep -c "Reached cover statement" "$work/cover.log" || true)
+    if [ "$mode" = prove ]; then
+      what="induction k=$depth (BMC $depth), covers $reached/$ncov within $cdepth steps"
+    else
+      what="BMC depth $depth only, covers $reached/$ncov within $cdepth steps"
+    fi
+    printf "PASS %-14s %-62s %6s s\n" "$b" "$what" "$secs"
+    return 0
+  fi
+  printf "FAIL %-14s %-62s %6s s\n" "$b" "$what" "$secs"
+  grep -hE "Assert failed|Unreached cover|failed assumption|Solver Error|ERROR" \
+    "$work"/*.log 2>/dev/null | head -5 | sed 's/^/     /'
+  return 1
+}
+
+status=0
+if [ "$jobs" -le 1 ] || [ ${#blocks[@]} -le 1 ]; then
+  for b in "${blocks[@]}"; do run_block "$b" || status=1; done
+else
+  # Up to $jobs blocks at once; lines printed in the order asked for.
+  tmp=$(mktemp -d)
+  trap 'rm -rf "$tmp"' EXIT
+  running=0
+  for b in "${blocks[@]}"; do
+    if [ $running -ge "$jobs" ]; then
+      wait -n || true
+      running=$((running - 1))
+    fi
+    (run_block "$b" >"$tmp/$b.out"; echo $? >"$tmp/$b.rc") &
+    running=$((running + 1))
+  done
+  wait || true
+  for b in "${blocks[@]}"; do
+    cat "$tmp/$b.out"
+    [ "$(cat "$tmp/$b.rc")" = 0 ] || status=1
+  done
+fi
+exit $status
