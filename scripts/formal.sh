@@ -23,7 +23,9 @@ solver="${FORMAL_SOLVER:-z3}"
 # block: top | files (repo-relative) | yosys commands before prep | mode | DEPTH | CDEPTH
 declare -A CFG
 CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||prove|10|90"
-ORDER=(crc16_ccitt)
+CFG[uart_tx]="uart_tx|rtl/uart_tx.v||prove|4|130"
+CFG[uart_rx]="uart_rx|rtl/uart_rx.v||prove|4|240"
+ORDER=(crc16_ccitt uart_tx uart_rx)
 
 jobs=1
 if [ "${1:-}" = "-j" ]; then
