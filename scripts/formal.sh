@@ -25,7 +25,8 @@ declare -A CFG
 CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||prove|10|90"
 CFG[uart_tx]="uart_tx|rtl/uart_tx.v||prove|4|130"
 CFG[uart_rx]="uart_rx|rtl/uart_rx.v||prove|4|240"
-ORDER=(crc16_ccitt uart_tx uart_rx)
+CFG[mc_safety]="mc_safety|rtl/mc_safety.v||prove|4|20"
+ORDER=(crc16_ccitt uart_tx uart_rx mc_safety)
 
 jobs=1
 if [ "${1:-}" = "-j" ]; then
