@@ -12,21 +12,28 @@
 # block fails, 2 on a usage error. Logs, models and traces (VCD of any failed
 # step) are kept in $FORMAL_DIR/<block>/ (default build/formal); with
 # FORMAL_TRACES=1 also a VCD of each cover's trace.
-# The solver is z3 (FORMAL_SOLVER overrides); the model is written with one
-# bit-vector per state (-stbv), so the solver sees QF_BV and bit-blasts.
+# The solver is z3 (FORMAL_SOLVER overrides).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 rtl="$root/rtl"
 outdir="${FORMAL_DIR:-$root/build/formal}"
 solver="${FORMAL_SOLVER:-z3}"
 
-# block: top | files (repo-relative) | yosys commands before prep | mode | DEPTH | CDEPTH
+# block: top | files (repo-relative) | Yosys commands before prep | after prep
+#        | model | mode | DEPTH | CDEPTH
+# model bv: every state one bit-vector (write_smt2 -stbv), logic QF_BV, which
+#   z3 bit-blasts: fast on XOR networks such as the CRC, but a memory becomes
+#   a bit-vector too, which z3 4.8 cannot digest;
+# model arrays: memories as SMT arrays (write_smt2's default encoding).
+# mode prove: BMC and k-induction; bmc: BMC only.
 declare -A CFG
-CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||prove|10|90"
-CFG[uart_tx]="uart_tx|rtl/uart_tx.v||prove|4|130"
-CFG[uart_rx]="uart_rx|rtl/uart_rx.v||prove|4|240"
-CFG[mc_safety]="mc_safety|rtl/mc_safety.v||prove|4|20"
-ORDER=(crc16_ccitt uart_tx uart_rx mc_safety)
+CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v|||bv|prove|10|90"
+CFG[uart_tx]="uart_tx|rtl/uart_tx.v|||bv|prove|4|130"
+CFG[uart_rx]="uart_rx|rtl/uart_rx.v|||bv|prove|4|240"
+CFG[mc_safety]="mc_safety|rtl/mc_safety.v|||bv|prove|4|20"
+CFG[seg_fifo]="seg_fifo|rtl/seg_fifo.v|||arrays|prove|4|20"
+CFG[seg_fifo_aw4]="seg_fifo|rtl/seg_fifo.v|chparam -set AW 4 seg_fifo;||arrays|prove|4|40"
+ORDER=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo seg_fifo_aw4)
 
 jobs=1
 if [ "${1:-}" = "-j" ]; then
@@ -50,20 +57,24 @@ done
 
 # Run one block; print its line; return 0 on PASS.
 run_block() {
-  local b="$1" top files pre mode depth cdepth
-  IFS='|' read -r top files pre mode depth cdepth <<<"${CFG[$b]}"
+  local b="$1" top files pre post model mode depth cdepth
+  IFS='|' read -r top files pre post model mode depth cdepth <<<"${CFG[$b]}"
   local work="$outdir/$b"
   rm -rf "$work"
   mkdir -p "$work"
   local t0 paths="" f
   t0=$(date +%s.%N)
   for f in $files; do paths="$paths $root/$f"; done
-  local smt=(yosys-smtbmc -s "$solver" --logic QF_BV --noprogress)
+  local smt=(yosys-smtbmc -s "$solver" --noprogress) stbv=""
+  if [ "$model" = bv ]; then
+    smt+=(--logic QF_BV)
+    stbv="-stbv"
+  fi
   local what="" ok=1 ctrace=()
   # Cover traces take longer to write than to find: only on request. The
   # asserts along them are not checked again (--noinfo): steps 1-2 prove them.
   [ -n "${FORMAL_TRACES:-}" ] && ctrace=(--dump-vcd "$work/cover%.vcd")
-  if ! yosys -q -l "$work/yosys.log" -p "read_verilog -formal -D FORMAL -D FORMAL_TOP_$top -I$rtl $paths; $pre prep -top $top; async2sync; dffunmap; write_smt2 -stbv -wires $work/model.smt2" >/dev/null 2>&1; then
+  if ! yosys -q -l "$work/yosys.log" -p "read_verilog -formal -D FORMAL -D FORMAL_TOP_$top -I$rtl $paths; $pre prep -top $top; $post async2sync; dffunmap; write_smt2 $stbv -wires $work/model.smt2" >/dev/null 2>&1; then
     ok=0; what="yosys failed (see $work/yosys.log)"
   elif ! "${smt[@]}" --presat -t "$depth" --dump-vcd "$work/bmc.vcd" "$work/model.smt2" >"$work/bmc.log" 2>&1; then
     ok=0; what="BMC failed within $depth steps ($work/bmc.log, bmc.vcd)"
