@@ -172,8 +172,9 @@ module mc_safety #(
       assert (enc_err_d == f_enc);
     end
 
-  // Not vacuous: the watchdog trips; a fault latches, holds until cleared,
-  // and the axis is armed again after.
+`ifdef FORMAL_TOP_mc_safety
+  // Not vacuous (covers only when this module is the top): the watchdog trips;
+  // a fault latches, holds until cleared, and the axis is armed again after.
   reg [1:0] f_story;  // 1 armed, 2 then a fault latched, 3 then cleared and armed again
   always @(posedge clk)
     if (rst) f_story <= 2'd0;
@@ -185,6 +186,7 @@ module mc_safety #(
       cover (!f_rst_q && f_kept_q == 16'd0 && fault_o == 16'd1 << B_F_WDOG && f_quiet_q == 24'd5);
       cover (f_story == 2'd3);
     end
+`endif
 
 `undef SAFE_ASSUME
 `endif
