@@ -12,30 +12,32 @@
 # block fails, 2 on a usage error. Logs, models and traces (VCD of any failed
 # step) are kept in $FORMAL_DIR/<block>/ (default build/formal); with
 # FORMAL_TRACES=1 also a VCD of each cover's trace.
-# The solver is z3 (FORMAL_SOLVER overrides).
+# The solver is the block's (FORMAL_SOLVER overrides): z3, or cvc5 where z3
+# 4.8 spends long on the model's definitions.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 rtl="$root/rtl"
 outdir="${FORMAL_DIR:-$root/build/formal}"
-solver="${FORMAL_SOLVER:-z3}"
 
 # block: top | files (repo-relative) | read_verilog options | hierarchy options
-#        | Yosys commands after prep | model | mode | DEPTH | CDEPTH
+#        | Yosys commands after prep | model | solver | mode | DEPTH | CDEPTH
 # model bv: every state one bit-vector (write_smt2 -stbv), logic QF_BV, which
 #   z3 bit-blasts: fast on XOR networks such as the CRC, but a memory becomes
 #   a bit-vector too, which z3 4.8 cannot digest;
 # model arrays: memories as SMT arrays (write_smt2's default encoding).
 # mode prove: BMC and k-induction; bmc: BMC only.
 declare -A CFG
-CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||||bv|prove|10|90"
-CFG[uart_tx]="uart_tx|rtl/uart_tx.v||||bv|prove|4|130"
-CFG[uart_rx]="uart_rx|rtl/uart_rx.v||||bv|prove|4|240"
-CFG[mc_safety]="mc_safety|rtl/mc_safety.v||||bv|prove|4|20"
-CFG[seg_fifo]="seg_fifo|rtl/seg_fifo.v||||arrays|prove|4|20"
-CFG[link_rx]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v|-D FORMAL_NO_PAY_RAM||delete t:\$mem_v2; setundef -undriven -anyseq; flatten; opt;|bv|prove|12|80"
-CFG[link_rx_pay]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v|||flatten; opt;|arrays|prove|12|0"
-CFG[seg_fifo_aw4]="seg_fifo|rtl/seg_fifo.v||-chparam AW 4||arrays|prove|4|40"
-ORDER=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo seg_fifo_aw4 link_rx link_rx_pay)
+CFG[crc16_ccitt]="crc16_ccitt|rtl/crc16_ccitt.v||||bv|z3|prove|10|90"
+CFG[uart_tx]="uart_tx|rtl/uart_tx.v||||bv|z3|prove|4|130"
+CFG[uart_rx]="uart_rx|rtl/uart_rx.v||||bv|z3|prove|4|240"
+CFG[mc_safety]="mc_safety|rtl/mc_safety.v||||bv|z3|prove|4|20"
+CFG[seg_fifo]="seg_fifo|rtl/seg_fifo.v||||arrays|z3|prove|4|20"
+CFG[link_rx]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v|-D FORMAL_NO_PAY_RAM||delete t:\$mem_v2; setundef -undriven -anyseq;|bv|z3|prove|12|80"
+CFG[link_rx_pay]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v||||arrays|z3|prove|12|0"
+CFG[quad_decoder]="quad_decoder|rtl/quad_decoder.v||-chparam FILT_W 4||bv|cvc5|prove|4|30"
+CFG[quad_rate]="quad_decoder|rtl/quad_decoder.v|-D FORMAL_QUAD_RATE|-chparam FILT_W 4||bv|cvc5|prove|6|40"
+CFG[seg_fifo_aw4]="seg_fifo|rtl/seg_fifo.v||-chparam AW 4||arrays|z3|prove|4|40"
+ORDER=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo seg_fifo_aw4 link_rx link_rx_pay quad_decoder quad_rate)
 
 jobs=1
 if [ "${1:-}" = "-j" ]; then
@@ -50,7 +52,7 @@ for b in "${blocks[@]}"; do
     exit 2
   fi
 done
-for tool in yosys yosys-smtbmc "$solver"; do
+for tool in yosys yosys-smtbmc z3 cvc5; do  # cvc5: quad_decoder
   if ! command -v "$tool" >/dev/null 2>&1; then
     echo "formal.sh: $tool not found (scripts/deps.sh installs it)" >&2
     exit 2
@@ -59,8 +61,9 @@ done
 
 # Run one block; print its line; return 0 on PASS.
 run_block() {
-  local b="$1" top files ropt hopt post model mode depth cdepth
-  IFS='|' read -r top files ropt hopt post model mode depth cdepth <<<"${CFG[$b]}"
+  local b="$1" top files ropt hopt post model solver mode depth cdepth
+  IFS='|' read -r top files ropt hopt post model solver mode depth cdepth <<<"${CFG[$b]}"
+  solver="${FORMAL_SOLVER:-$solver}"
   local work="$outdir/$b"
   rm -rf "$work"
   mkdir -p "$work"
@@ -72,17 +75,19 @@ run_block() {
     smt+=(--logic QF_BV)
     stbv="-stbv"
   fi
-  local what="" ok=1 ctrace=()
-  # Cover traces take longer to write than to find: only on request. The
-  # asserts along them are not checked again (--noinfo): steps 1-2 prove them.
+  # Cover traces take longer to write than to find: only on request. With
+  # z3 the asserts along them are not checked again (--noinfo): steps 1 and
+  # 2 prove them. (cvc5 gives no model for the covers with --noinfo.)
+  local what="" ok=1 ctrace=() cinfo=(--noinfo)
   [ -n "${FORMAL_TRACES:-}" ] && ctrace=(--dump-vcd "$work/cover%.vcd")
-  if ! yosys -q -l "$work/yosys.log" -p "read_verilog -formal -D FORMAL -D FORMAL_TOP_$top $ropt -I$rtl $paths; hierarchy -top $top $hopt; prep -top $top; $post async2sync; dffunmap; write_smt2 $stbv -wires $work/model.smt2" >/dev/null 2>&1; then
+  [ "$solver" = z3 ] || cinfo=()
+  if ! yosys -q -l "$work/yosys.log" -p "read_verilog -formal -D FORMAL -D FORMAL_TOP_$top $ropt -I$rtl $paths; hierarchy -top $top $hopt; prep -top $top; $post flatten; opt; async2sync; dffunmap; write_smt2 $stbv -wires $work/model.smt2" >/dev/null 2>&1; then
     ok=0; what="yosys failed (see $work/yosys.log)"
   elif ! "${smt[@]}" --presat -t "$depth" --dump-vcd "$work/bmc.vcd" "$work/model.smt2" >"$work/bmc.log" 2>&1; then
     ok=0; what="BMC failed within $depth steps ($work/bmc.log, bmc.vcd)"
   elif [ "$mode" = prove ] && ! "${smt[@]}" -i -t "$depth" --dump-vcd "$work/induction.vcd" "$work/model.smt2" >"$work/induction.log" 2>&1; then
     ok=0; what="induction failed at depth $depth ($work/induction.log, induction.vcd)"
-  elif [ "$cdepth" -gt 0 ] && ! "${smt[@]}" --noinfo -c -t "$cdepth" "${ctrace[@]}" "$work/model.smt2" >"$work/cover.log" 2>&1; then
+  elif [ "$cdepth" -gt 0 ] && ! "${smt[@]}" "${cinfo[@]}" -c -t "$cdepth" "${ctrace[@]}" "$work/model.smt2" >"$work/cover.log" 2>&1; then
     ok=0; what="cover failed within $cdepth steps ($work/cover.log)"
   fi
   local secs ncov reached
