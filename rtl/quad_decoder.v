@@ -357,7 +357,8 @@ module quad_decoder #(
   wire [31:0] f_delta = (f_fwd != f_back) ? ((f_fwd ^ dir_inv_i) ? 32'd1 : 32'hFFFF_FFFF) : 32'd0;
 
   reg [31:0] f_pos_q, f_delta_q, f_load_val_q;
-  reg f_load_q, f_clr_q, f_both_q, f_err_q, f_errclr_q, f_hit_q, f_arm_q, f_disarm_q, f_armed_q;
+  reg [31:0] f_idx_q;
+  reg f_load_q, f_clr_q, f_both_q, f_err_q, f_errclr_q, f_hit_q, f_arm_q, f_disarm_q, f_armed_q, f_seen_idx_q;
   reg [ERR_W-1:0] f_err_cnt_q;
   always @(posedge clk) begin
     f_pos_q      <= pos_o;
@@ -373,6 +374,8 @@ module quad_decoder #(
     f_arm_q      <= idx_arm_i;
     f_disarm_q   <= idx_disarm_i;
     f_armed_q    <= idx_armed_o;
+    f_seen_idx_q <= idx_seen_o;
+    f_idx_q      <= idx_pos_o;
   end
 
   always @(*)
@@ -400,6 +403,16 @@ module quad_decoder #(
         assert (f_load_q || pos_o == (f_clr_q ? 32'd0 : f_pos_q + f_delta_q));
       end
       if (!f_rst_q && !f_hit_q) assert (idx_armed_o == (!f_disarm_q && (f_arm_q || f_armed_q)));
+      if (!f_rst_q && !f_hit_q) assert (idx_seen_o == (!f_arm_q && f_seen_idx_q));
+      if (f_rst_q) assert (!idx_armed_o && !idx_seen_o);
+      // The latched position is the count the clock of the edge made, the
+      // one an index clear zeroes; it holds otherwise. (With IDX_RAM it
+      // follows a clock later and survives reset: not proven here.)
+      if (IDX_RAM == 0) begin
+        if (f_rst_q) assert (idx_pos_o == 32'd0);
+        else if (f_hit_q) assert (idx_pos_o == f_pos_q + f_delta_q);
+        else assert (idx_pos_o == f_idx_q);
+      end
       // How the registers make that (the induction needs it spelled out).
       if (f_age2 == 2'd2) assert (sync == f_p2);
       for (c = 0; c < 3; c = c + 1)
