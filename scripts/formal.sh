@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
 # Formal proofs of the RTL's `ifdef FORMAL` properties (docs/formal.md).
-# usage: scripts/formal.sh [-j N] [block...]     (no block: all of them)
+# usage: scripts/formal.sh [-jN | -j N] [--mutants] [block...]
+#                                  (no block: all of them)
+#        scripts/formal.sh --list [quick]
+#                                  the block names; quick: those `make test`
+#                                  runs (tests/formal.cmake), the rest only
+#                                  `make formal` (they take minutes)
 #
 # Each block: Yosys reads its files with -formal (FORMAL and FORMAL_TOP_<top>
 # defined) and writes an SMT-LIB2 model; yosys-smtbmc then runs
@@ -12,6 +17,9 @@
 # block fails, 2 on a usage error. Logs, models and traces (VCD of any failed
 # step) are kept in $FORMAL_DIR/<block>/ (default build/formal); with
 # FORMAL_TRACES=1 also a VCD of each cover's trace.
+# --mutants: each block instead proves a copy of its files with one plausible
+# bug injected (MUT below, a sed expression): the line says CAUGHT and which
+# step failed, or MISSED (exit status 1) if the broken copy still passes.
 # The solver is the block's (FORMAL_SOLVER overrides): z3, or cvc5 where z3
 # 4.8 spends long on the model's definitions.
 set -euo pipefail
@@ -38,11 +46,34 @@ CFG[quad_decoder]="quad_decoder|rtl/quad_decoder.v||-chparam FILT_W 4||bv|cvc5|p
 CFG[quad_rate]="quad_decoder|rtl/quad_decoder.v|-D FORMAL_QUAD_RATE|-chparam FILT_W 4||bv|cvc5|prove|6|40"
 CFG[seg_fifo_aw4]="seg_fifo|rtl/seg_fifo.v||-chparam AW 4||arrays|z3|prove|4|40"
 ORDER=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo seg_fifo_aw4 link_rx link_rx_pay quad_decoder quad_rate)
+QUICK=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo link_rx quad_decoder)
 
+# One plausible bug per block, as a sed expression on its files.
+declare -A MUT
+MUT[crc16_ccitt]="s/(crc_o\[15\] ^ sh\[7\]) ? 16'h1021/(crc_o[15] ^ sh[7]) ? 16'h1031/"   # wrong polynomial
+MUT[uart_tx]="s/left <= 4'd9;/left <= 4'd8;/"                                               # a data bit short
+MUT[uart_rx]="s/valid_o <= rx_i;/valid_o <= 1'b1;/"                                         # no stop-bit check
+MUT[mc_safety]="s/arm_set_i \&\& fault_o == 16'd0) armed_o/arm_set_i) armed_o/"             # arms over a fault
+MUT[seg_fifo]="s/if (do_rd) rp <= rp + 1'b1;/if (do_rd \&\& !do_wr) rp <= rp + 1'b1;/"      # read lost beside a write
+MUT[seg_fifo_aw4]="${MUT[seg_fifo]}"
+MUT[link_rx]="s/{byte_i, crc_lo} == crc/{crc_lo, byte_i} == crc/"                         # CRC bytes swapped
+MUT[link_rx_pay]="${MUT[link_rx]}"
+MUT[quad_decoder]="s/: ~(sync\[1\] ^ filt\[0\]);/: (sync[1] ^ filt[0]);/"                  # B edges counted backwards
+MUT[quad_rate]="s/straddle = |(drop\[1:0\]/straddle = |(differ[1:0]/"                        # error on a pending edge
+
+if [ "${1:-}" = --list ]; then
+  if [ "${2:-}" = quick ]; then echo "${QUICK[*]}"; else echo "${ORDER[*]}"; fi
+  exit 0
+fi
 jobs=1
-if [ "${1:-}" = "-j" ]; then
-  jobs="${2:?-j needs a number}"
-  shift 2
+case "${1:-}" in
+  -j) jobs="${2:?-j needs a number}"; shift 2 ;;
+  -j*) jobs="${1#-j}"; shift ;;
+esac
+mutants=0
+if [ "${1:-}" = --mutants ]; then
+  mutants=1
+  shift
 fi
 blocks=("$@")
 [ ${#blocks[@]} -eq 0 ] && blocks=("${ORDER[@]}")
@@ -65,11 +96,25 @@ run_block() {
   IFS='|' read -r top files ropt hopt post model solver mode depth cdepth <<<"${CFG[$b]}"
   solver="${FORMAL_SOLVER:-$solver}"
   local work="$outdir/$b"
+  local tdepth="$cdepth"  # long enough for a whole byte or frame
+  [ $mutants -eq 1 ] && work="$outdir/$b.mutant" && cdepth=0  # asserts only
   rm -rf "$work"
   mkdir -p "$work"
   local t0 paths="" f
   t0=$(date +%s.%N)
   for f in $files; do paths="$paths $root/$f"; done
+  if [ $mutants -eq 1 ]; then
+    paths=""
+    for f in $files; do
+      mkdir -p "$work/src/$(dirname "$f")"
+      sed "${MUT[$b]}" "$root/$f" >"$work/src/$f"
+      paths="$paths $work/src/$f"
+    done
+    if (cd "$work/src" && for f in $files; do cmp -s "$f" "$root/$f" || exit 1; done); then
+      printf "ERROR %-14s the mutant changes nothing: %s\n" "$b" "${MUT[$b]}"
+      return 1
+    fi
+  fi
   local smt=(yosys-smtbmc -s "$solver" --noprogress) stbv=""
   if [ "$model" = bv ]; then
     smt+=(--logic QF_BV)
@@ -92,6 +137,30 @@ run_block() {
   fi
   local secs ncov reached
   secs=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+  if [ $mutants -eq 1 ]; then
+    if [ $ok -eq 1 ]; then
+      printf "MISSED %-14s %-60s %6s s\n" "$b" "still proven: ${MUT[$b]}" "$secs"
+      return 1
+    elif [[ "$what" == yosys* ]]; then
+      printf "ERROR %-14s %-61s %6s s\n" "$b" "$what" "$secs"
+      return 1
+    fi
+    # An induction failure may start from an unreachable state: look for a
+    # trace from reset as long as the covers' before calling it caught.
+    if [[ "$what" == induction* ]] && [ "$tdepth" -gt "$depth" ]; then
+      if "${smt[@]}" --presat -t "$tdepth" "$work/model.smt2" >"$work/bmc_long.log" 2>&1; then
+        printf "WEAK   %-14s %-60s %6s s\n" "$b" "induction fails, but no trace from reset within $tdepth" "$secs"
+        return 0
+      fi
+      what="BMC failed within $tdepth steps"
+      rm -f "$work/induction.log"
+      secs=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+    fi
+    local at
+    at=$(grep -shoE "Assert failed in [^:]*: [^ ]*" "$work"/*.log | head -1 | sed -E 's|.*/src/||; s|:[0-9.]+-([0-9]+)[.].*|:\1|')
+    printf "CAUGHT %-14s %-60s %6s s\n" "$b" "${what%% (*}${at:+: assert at $at}" "$secs"
+    return 0
+  fi
   if [ $ok -eq 1 ]; then
     ncov=$(grep -c "yosys-smt2-cover" "$work/model.smt2" || true)
     reached=$(grep -sc "Reached cover statement" "$work/cover.log" || true)
