@@ -6,6 +6,7 @@ set -euo pipefail
 PKGS=(
   build-essential cmake ninja-build
   verilator yosys nextpnr-ice40 fpga-icestorm jq
+  z3 cvc5
   libsystemc-dev libeigen3-dev
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
