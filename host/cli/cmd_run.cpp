@@ -132,9 +132,7 @@ void run_job(const RunOptions& o) {
   // A fresh board (the virtual one after start) has no gains: the machine's.
   if (mc::machine::gains_where_missing(l, m, note) > 0) st = read_state(l);
   // Plan from where the axes are (enabling starts the command there).
-  enable_axes(l, axes, note);
-  Vec3 at{};
-  for (int a : axes) at[size_t(a)] = int64_t(int32_t(l.read(board::reg::axis(a, board::reg::AX_CMD))));
+  const Vec3 at = enable_axes(l, axes, note);
   const mc::host::PlannerConfig cfg = mc::machine::planner_config(m);
   const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg));
   // Ctrl-C from here on stops the job along the path; the line below says so.
