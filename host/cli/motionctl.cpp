@@ -71,6 +71,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_step_commands(app);
   mc::host::cli::add_tune_command(app);
   mc::host::cli::add_hostloop_command(app);
+  mc::host::cli::add_serve_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");
