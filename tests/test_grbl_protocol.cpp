@@ -452,3 +452,76 @@ TEST(GrblProtocol, SleepNeedsAReset) {
 
 }  // namespace
 }  // namespace mc::grbl::test
+
+namespace mc::grbl::test {
+namespace {
+
+// A machine that can home: homing takes 0.3 s of board time, or fails when
+// the test says so. It stands in for the machine-cycles work to come.
+class HomingMachine : public DryRunBackend {
+ public:
+  HomingMachine() : DryRunBackend(4) {}
+  int home(unsigned axis_mask) override {
+    mask_ = axis_mask;
+    left_s_ = 0.3;
+    return 0;
+  }
+  Status status() const override {
+    Status s = DryRunBackend::status();
+    if (left_s_ > 0) s.motion = Motion::homing;
+    return s;
+  }
+  void soft_reset() override {
+    left_s_ = 0;
+    DryRunBackend::soft_reset();
+  }
+  void step(double dt_s) {
+    left_s_ -= dt_s;
+    advance(dt_s);
+  }
+  unsigned mask_ = 0;
+  double left_s_ = 0;
+};
+
+TEST(GrblProtocol, HomingUnlocksAndRunsTheStartupBlocks) {
+  HomingMachine m;
+  Stored s = test_defaults();
+  s.settings.homing = true;
+  s.startup[1] = "G20";
+  EngineOptions o;
+  o.stored = s;
+  Engine e(m, o);
+  EXPECT_EQ(e.take_output(), kBannerLine + "[MSG:'$H'|'$X' to unlock]\r\n");
+  e.receive("$H\n");
+  e.poll();
+  EXPECT_EQ(e.take_output(), "");
+  EXPECT_EQ(e.state(), "Alarm");  // still locked while it homes
+  for (int i = 0; i < 250; ++i) m.step(1e-3), e.poll();
+  EXPECT_EQ(e.take_output(), "");
+  for (int i = 0; i < 100; ++i) m.step(1e-3), e.poll();
+  EXPECT_EQ(e.take_output(), "ok\r\n>G20:ok\r\n");
+  EXPECT_EQ(m.mask_, 7u);
+  EXPECT_EQ(e.state(), "Idle");
+  // A reset while homing is ALARM:6; a failed cycle is the machine's alarm.
+  e.receive("$H\n");
+  e.poll();
+  m.step(0.1);
+  e.receive("\x18");
+  EXPECT_EQ(e.take_output(), "ALARM:6\r\n" + kBannerLine + "[MSG:'$H'|'$X' to unlock]\r\n");
+  e.receive("$H\n");
+  e.poll();
+  m.inject_fault({9, "", false});
+  e.poll();
+  EXPECT_EQ(e.take_output(), "ALARM:9\r\nerror:9\r\n");
+  EXPECT_EQ(e.state(), "Alarm");
+}
+
+TEST(GrblProtocol, PinsShowInTheReport) {
+  Rig r;
+  r.status();
+  r.backend.set_probe_surface(0.5);
+  EXPECT_EQ(r.status(), "<Idle|MPos:0.000,0.000,0.000|FS:0,0|Pn:P|Ov:100,100,100>");
+}
+
+}  // namespace
+}  // namespace mc::grbl::test
