@@ -13,3 +13,15 @@ target_link_libraries(test_grbl_stream PRIVATE mc_grbl)
 
 mc_gtest(test_grbl_server unit test_grbl_server.cpp)
 target_link_libraries(test_grbl_server PRIVATE mc_grbl)
+
+# Real senders (label client): cncjs 1.11.5, installed from npm by
+# scripts/deps.sh, runs a job on `motionctl serve --dry-run` through its own
+# server and socket.io API.
+find_program(MC_NODE node)
+set(MC_CNCJS_DIR "$ENV{HOME}/.cache/motioncore/cncjs-1.11.5" CACHE PATH "cncjs as scripts/deps.sh installs it")
+if(DEFINED ENV{MC_CNCJS_DIR})
+  set(MC_CNCJS_DIR "$ENV{MC_CNCJS_DIR}")
+endif()
+add_test(NAME GrblClient.cncjs
+  COMMAND ${MC_NODE} ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_cncjs.js $<TARGET_FILE:motionctl> ${MC_CNCJS_DIR})
+set_tests_properties(GrblClient.cncjs PROPERTIES LABELS client TIMEOUT 300)
