@@ -76,6 +76,12 @@ TEST(GrblServer, SpeaksGrblOnThePtyAndOnTcp) {
   for (int i = 0; i < 100 && server.tcp_clients() == 0; ++i) server.step({});
   ASSERT_EQ(server.tcp_clients(), 1u);
 
+  // Each sender is greeted with the banner when it connects, as by a board
+  // that resets when its port opens.
+  const std::string banner = "\r\nGrbl 1.1h ['$' for help]\r\n";
+  EXPECT_EQ(read_until(server, rig.backend, serial.fd, "help]\r\n"), banner);
+  EXPECT_EQ(read_until(server, rig.backend, tcp.fd, "help]\r\n"), banner);
+
   // A line from the serial port: its answer reaches both.
   write_all(serial.fd, "$I\n");
   const std::string want = "[VER:1.1h.20190830:]\r\n[OPT:VNM,4,128]\r\nok\r\n";
@@ -94,7 +100,7 @@ TEST(GrblServer, SpeaksGrblOnThePtyAndOnTcp) {
 
   // A soft reset from the serial port; the TCP client sees the banner too.
   write_all(serial.fd, "\x18");
-  EXPECT_EQ(read_until(server, rig.backend, tcp.fd, "help]\r\n"), "\r\nGrbl 1.1h ['$' for help]\r\n");
+  EXPECT_EQ(read_until(server, rig.backend, tcp.fd, "help]\r\n"), banner);
 
   // A client that hangs up is dropped; the server goes on.
   ::close(tcp.fd);
@@ -104,6 +110,14 @@ TEST(GrblServer, SpeaksGrblOnThePtyAndOnTcp) {
   read_until(server, rig.backend, serial.fd, "help]\r\n");
   write_all(serial.fd, "$G\n");
   EXPECT_NE(read_until(server, rig.backend, serial.fd, "ok\r\n").find("[GC:"), std::string::npos);
+
+  // The serial sender leaves replies unread and goes; the next one sees only its greeting.
+  write_all(serial.fd, "$#\n");
+  for (int i = 0; i < 20; ++i) server.step({});
+  ::close(serial.fd);
+  serial.fd = ::open(link.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  ASSERT_GE(serial.fd, 0);
+  EXPECT_EQ(read_until(server, rig.backend, serial.fd, "help]\r\n"), banner);
 }
 
 TEST(GrblServer, TheLinkIsRemovedAndNeverReplacesAFile) {

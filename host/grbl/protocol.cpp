@@ -96,6 +96,12 @@ size_t Engine::input_room() const {
   return rx_.size() >= kMaxBacklog ? 0 : kMaxBacklog - rx_.size();
 }
 
+std::string Engine::greeting() const {
+  std::string s = "\r\n" + std::string(kBanner) + "\r\n";
+  if (alarm_) s += "[MSG:'$H'|'$X' to unlock]\r\n";
+  return s;
+}
+
 std::string Engine::take_output() {
   std::string s;
   s.swap(out_);
@@ -350,10 +356,8 @@ void Engine::soft_reset(bool power_up) {
   o.data.g92 = {};
   o.data.g92_applied = true;
   interp_ = gcode::Interpreter(o);
-  out_ += "\r\n" + std::string(kBanner) + "\r\n";
-  if (alarm_) {
-    emit("[MSG:'$H'|'$X' to unlock]");
-  } else {
+  out_ += greeting();
+  if (!alarm_) {
     for (const std::string& l : stored_.startup)
       if (!l.empty()) startup_.push_back(l);
   }

@@ -57,6 +57,10 @@ class Engine {
   void poll();
   // The replies produced so far, handed over once.
   std::string take_output();
+  // What a sender that has just connected is shown, as when opening a serial
+  // port resets an Arduino: the banner (and the unlock hint in an alarm). For
+  // that sender only; the machine does not reset.
+  std::string greeting() const;
 
   // Bytes waiting in the receive buffer. A sender that ignores flow control
   // can push past kRxBufferSize; the caller stops reading its input once

@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/inotify.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <termios.h>
@@ -85,6 +86,13 @@ Server::Server(Engine& engine, const ServerOptions& options) : engine_(engine), 
       }
       ::unlink(opt_.pty_link.c_str());
     }
+    // Opens of the slave by anyone but us from now on; without inotify the
+    // PTY works the same, only without the greeting.
+    inotify_fd_ = ::inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+    if (inotify_fd_ >= 0 && ::inotify_add_watch(inotify_fd_, pty_path_.c_str(), IN_OPEN) < 0) {
+      ::close(inotify_fd_);
+      inotify_fd_ = -1;
+    }
     if (::symlink(pty_path_.c_str(), opt_.pty_link.c_str()) != 0) {
       const std::string e = sys_error("symlink " + opt_.pty_link + " -> " + pty_path_);
       ::close(pty_slave_);
@@ -128,6 +136,8 @@ void Server::close_all() {
     if (n > 0 && std::string(target, size_t(n)) == pty_path_) ::unlink(opt_.pty_link.c_str());
     pty_path_.clear();
   }
+  if (inotify_fd_ >= 0) ::close(inotify_fd_);
+  inotify_fd_ = -1;
   if (pty_slave_ >= 0) ::close(pty_slave_);
   pty_slave_ = -1;
   if (pty_.fd >= 0) ::close(pty_.fd);
@@ -164,6 +174,7 @@ void Server::step(const std::function<void()>& tick) {
   std::vector<pollfd> fds;
   if (pty_.fd >= 0) fds.push_back({pty_.fd, short(POLLIN | (pty_.out.empty() ? 0 : POLLOUT)), 0});
   if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
+  if (inotify_fd_ >= 0) fds.push_back({inotify_fd_, POLLIN, 0});
   for (const Pipe& c : clients_) fds.push_back({c.fd, short(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
   // Stop reading while the engine has no room: the kernel buffers, the
   // sender waits, nothing is dropped.
@@ -172,12 +183,22 @@ void Server::step(const std::function<void()>& tick) {
   ::poll(fds.data(), fds.size(), opt_.tick_ms);
 
   bool closed = false;
+  if (inotify_fd_ >= 0) {
+    alignas(inotify_event) char ev[4096];
+    bool opened = false;
+    while (::read(inotify_fd_, ev, sizeof ev) > 0) opened = true;
+    if (opened) {
+      // A new sender: what an earlier one left unread is not for it.
+      ::tcflush(pty_slave_, TCIFLUSH);
+      pty_.out = engine_.greeting();
+    }
+  }
   if (pty_.fd >= 0) read_from(pty_, closed);  // a PTY never closes: our slave fd keeps it open
   if (listen_fd_ >= 0) {
     for (;;) {
       const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
       if (fd < 0) break;
-      clients_.push_back(Pipe{fd, {}});
+      clients_.push_back(Pipe{fd, engine_.greeting()});
     }
   }
   std::vector<bool> gone(clients_.size(), false);

@@ -3,6 +3,11 @@
 // /tmp/motioncore) and, optionally, TCP on 127.0.0.1 (bCNC's and UGS's
 // socket://). Every byte read from either goes to one protocol Engine, and
 // every reply goes to all of them. One thread, poll()-based.
+//
+// A sender that opens the PTY or connects gets the banner (Engine::greeting),
+// as from a Grbl board whose port opening resets it: senders such as UGS wait
+// for it to know the version. Replies left unread in the PTY by an earlier
+// sender are dropped at that moment (the PTY's opens are seen with inotify).
 #pragma once
 
 #include <atomic>
@@ -53,7 +58,8 @@ class Server {
   Engine& engine_;
   ServerOptions opt_;
   Pipe pty_;
-  int pty_slave_ = -1;  // held open so the master never sees a hang-up between senders
+  int pty_slave_ = -1;   // held open so the master never sees a hang-up between senders
+  int inotify_fd_ = -1;  // IN_OPEN on the PTY's slave: a sender opened it
   std::string pty_path_;
   int listen_fd_ = -1;
   int port_ = -1;
