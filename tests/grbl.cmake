@@ -14,6 +14,11 @@ target_link_libraries(test_grbl_stream PRIVATE mc_grbl)
 mc_gtest(test_grbl_server unit test_grbl_server.cpp)
 target_link_libraries(test_grbl_server PRIVATE mc_grbl)
 
+# motionctl serve itself: errors, a live run over TCP, SIGTERM, the settings file.
+mc_gtest(test_grbl_cli unit test_grbl_cli.cpp)
+target_compile_definitions(test_grbl_cli PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_grbl_cli motionctl)
+
 # Real senders (label client): cncjs 1.11.5, installed from npm by
 # scripts/deps.sh, runs a job on `motionctl serve --dry-run` through its own
 # server and socket.io API.

@@ -100,6 +100,11 @@ Server::Server(Engine& engine, const ServerOptions& options) : engine_(engine), 
       throw std::runtime_error(e);
     }
   }
+  // Whatever the engine said before the server existed (the power-up banner)
+  // is for the PTY, which keeps it for the first sender; a TCP client gets
+  // its own greeting when it connects.
+  const std::string early = engine_.take_output();
+  if (pty_.fd >= 0) pty_.out = early;
   if (opt_.tcp_port >= 0) {
     listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
     const int one = 1;
