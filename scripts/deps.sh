@@ -12,6 +12,7 @@ PKGS=(
   gnuplot-nox
   clang-format clang-tidy ccache
   linuxcnc-uspace
+  bcnc
 )
 
 missing=()
