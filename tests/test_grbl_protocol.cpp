@@ -525,3 +525,28 @@ TEST(GrblProtocol, PinsShowInTheReport) {
 
 }  // namespace
 }  // namespace mc::grbl::test
+
+namespace mc::grbl::test {
+namespace {
+
+TEST(GrblProtocol, ASenderIgnoringFlowControlLosesNothing) {
+  // Grbl would drop what overflows its 128 bytes; here it waits (input_room()).
+  Stored st = test_defaults();
+  st.settings.report_mask = 3;
+  Rig r(st);
+  std::string all;
+  for (int i = 1; i <= 500; ++i) all += "N" + std::to_string(i) + "G1X" + std::to_string(i % 7) + "F6000\n";
+  EXPECT_GT(all.size(), 20 * kRxBufferSize);
+  EXPECT_GE(r.engine->input_room(), all.size());
+  std::string out = r.send(all);
+  EXPECT_GT(r.engine->buffered(), kRxBufferSize);
+  EXPECT_NE(r.status().find("|Bf:0,0|"), std::string::npos);  // planner full, buffer full
+  out += r.run_until_idle(120);
+  EXPECT_EQ(count(out, "ok\r\n"), 500u);
+  EXPECT_EQ(out.size(), 500 * std::string("ok\r\n").size());
+  ASSERT_EQ(r.backend.received().size(), 500u);
+  for (size_t i = 0; i < 500; ++i) EXPECT_EQ(r.backend.received()[i].line_number, int(i + 1));
+}
+
+}  // namespace
+}  // namespace mc::grbl::test

@@ -176,15 +176,14 @@ void Server::flush(Pipe& p, bool& closed) {
 }
 
 void Server::step(const std::function<void()>& tick) {
+  // Stop reading senders while the engine has no room: the kernel buffers,
+  // the sender waits, nothing is dropped.
+  const short in = engine_.input_room() > 0 ? POLLIN : 0;
   std::vector<pollfd> fds;
-  if (pty_.fd >= 0) fds.push_back({pty_.fd, short(POLLIN | (pty_.out.empty() ? 0 : POLLOUT)), 0});
+  if (pty_.fd >= 0) fds.push_back({pty_.fd, short(in | (pty_.out.empty() ? 0 : POLLOUT)), 0});
   if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
   if (inotify_fd_ >= 0) fds.push_back({inotify_fd_, POLLIN, 0});
-  for (const Pipe& c : clients_) fds.push_back({c.fd, short(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
-  // Stop reading while the engine has no room: the kernel buffers, the
-  // sender waits, nothing is dropped.
-  if (engine_.input_room() == 0)
-    for (pollfd& f : fds) f.events &= short(~POLLIN);
+  for (const Pipe& c : clients_) fds.push_back({c.fd, short(in | (c.out.empty() ? 0 : POLLOUT)), 0});
   ::poll(fds.data(), fds.size(), opt_.tick_ms);
 
   bool closed = false;
