@@ -87,9 +87,10 @@ TEST(SimConfig, DefaultParsesToTheDatasheetValues) {
   EXPECT_EQ(m.host_io_latency_s, 0.001);
   EXPECT_EQ(m.host_dac_bits, 12);
   EXPECT_EQ(m.host_dac_range_v, 10);
-  ASSERT_EQ(m.axes.size(), 2u);
+  ASSERT_EQ(m.axes.size(), 3u);
   EXPECT_EQ(m.axes[0].name, "x");
   EXPECT_EQ(m.axes[1].name, "y");
+  EXPECT_EQ(m.axes[2].name, "z");
   for (const AxisConfig& a : m.axes) {
     // maxon RE 40 148867 (configs/default.toml cites the datasheet lines).
     EXPECT_EQ(a.motor.r_ohm, 1.13);
@@ -108,7 +109,10 @@ TEST(SimConfig, DefaultParsesToTheDatasheetValues) {
     EXPECT_EQ(a.lead_m_per_rev, 0.005);
     EXPECT_EQ(a.pid.ts_s, 1e-4);
   }
-  // The two axes are identical.
+  // X and Y are identical; Z carries what is left of the spindle's weight.
+  EXPECT_GT(m.axes[2].load_force_n, 0);
+  // Counterbalanced: with the drives off, gravity's torque is under the stiction.
+  EXPECT_LT(reflected_torque_nm(m.axes[2]), m.axes[2].motor.stiction_nm);
   EXPECT_EQ(m.axes[0].pid.kp, m.axes[1].pid.kp);
   EXPECT_EQ(m.axes[0].load_kg, m.axes[1].load_kg);
 }
@@ -139,7 +143,10 @@ TEST(SimConfig, DefaultUnitsAreSane) {
     EXPECT_DOUBLE_EQ(a.drive.dac_range_v * a.drive.amp_gain, a.drive.supply_v);
     EXPECT_DOUBLE_EQ(counts_per_m(a), 400000);
     EXPECT_NEAR(reflected_inertia_kg_m2(a), a.load_kg * std::pow(0.005 / (2 * kPi), 2), 1e-15);
-    EXPECT_EQ(reflected_torque_nm(a), 0);
+    if (a.name == "z")
+      EXPECT_NEAR(reflected_torque_nm(a), a.load_force_n * 0.005 / (2 * kPi), 1e-12);
+    else
+      EXPECT_EQ(reflected_torque_nm(a), 0);
   }
 }
 
@@ -157,18 +164,39 @@ TEST(SimConfig, AxisLookupIsCaseInsensitive) {
 }
 
 TEST(SimConfig, OptionalZAxis) {
+  // The built-in router without its Z tables: an XY table.
   std::string text(default_machine_toml());
   for (const std::string t : {"", ".motor", ".drive", ".pid"}) {
-    const auto from = text.find("[axis.y" + t + "]");
+    const auto from = text.find("[axis.z" + t + "]");
+    ASSERT_NE(from, std::string::npos);
     const auto to = text.find("\n[", from + 1);
-    std::string block = text.substr(from, to - from);
-    block.replace(0, 7, "[axis.z");
-    text += "\n" + block + "\n";
+    text.erase(from, to == std::string::npos ? std::string::npos : to - from + 1);
   }
-  const MachineConfig m = parse_machine(text, "xyz.toml");
-  ASSERT_EQ(m.axes.size(), 3u);
-  EXPECT_EQ(m.axes[2].name, "z");
-  EXPECT_EQ(axis(m, "Z").motor.r_ohm, 1.13);
+  const MachineConfig m = parse_machine(text, "xy.toml");
+  ASSERT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(m.axes[1].name, "y");
+  // The planner's keys are optional: an older file without them loads with
+  // the documented defaults.
+  for (const std::string key : {"max_accel_m_s2", "travel_min_m", "travel_max_m"}) {
+    for (size_t at = text.find("\n" + key); at != std::string::npos; at = text.find("\n" + key))
+      text.erase(at + 1, text.find('\n', at + 1) - at);
+  }
+  const auto planner = text.find("\n[planner]");
+  ASSERT_NE(planner, std::string::npos);
+  text.erase(planner + 1);
+  const MachineConfig old = parse_machine(text, "old.toml");
+  EXPECT_EQ(old.axes[0].max_accel_m_s2, 1.0);
+  EXPECT_EQ(old.axes[0].travel_min_m, -1.0);
+  EXPECT_EQ(old.planner.junction_deviation_m, 1e-5);
+  std::string inverted(default_machine_toml());
+  inverted.replace(inverted.find("travel_max_m = 0.3"), 18, "travel_max_m = -0.5");
+  try {
+    parse_machine(inverted, "inv.toml");
+    ADD_FAILURE() << "an inverted travel was accepted";
+  } catch (const mc::host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("travel_max_m > travel_min_m"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("inv.toml:"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SimConfig, UnknownKeyIsAnError) {
@@ -238,7 +266,7 @@ TEST(SimConfig, LoadFromFile) {
   }
   const MachineConfig m = load_machine(path);
   EXPECT_EQ(m.source, path);
-  EXPECT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(m.axes.size(), 3u);
   EXPECT_EQ(machine_or_default("").source, "built-in default");
   std::remove(path.c_str());
   try {

@@ -67,6 +67,17 @@ class Reader {
     return v;
   }
 
+  // A key added after the first release: files written before it keep
+  // loading, with the documented default (configs/default.toml names it).
+  double number_or(std::string_view key, double fallback, Range r, std::string_view unit) {
+    if (!has(key)) {
+      used_.insert(std::string(key));
+      order_.emplace_back(key);
+      return fallback;
+    }
+    return number(key, r, unit);
+  }
+
   int integer(std::string_view key, int lo, int hi, std::string_view unit) {
     const toml::node& n = need(key);
     const std::string expected = "a whole number " + std::to_string(lo) + ".." + std::to_string(hi) +
@@ -232,11 +243,31 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   a.encoder_cpr = r.integer("encoder_counts_per_rev", 4, 1 << 24, "counts per motor rev after 4x decoding");
   a.max_following_error_m = r.number("max_following_error_m", Range::positive, "m");
   a.max_speed_m_s = r.number("max_speed_m_s", Range::positive, "m/s");
+  a.max_accel_m_s2 = r.number_or("max_accel_m_s2", 1.0, Range::positive, "m/s^2");
+  a.travel_min_m = r.number_or("travel_min_m", -1.0, Range::any, "m");
+  a.travel_max_m = r.number_or("travel_max_m", 1.0, Range::any, "m");
+  if (!(a.travel_min_m < a.travel_max_m))
+    throw r.error("travel_max_m", format_number(a.travel_max_m),
+                  "travel_max_m > travel_min_m = " + format_number(a.travel_min_m));
   a.motor = read_motor(r.table("motor"));
   a.drive = read_drive(r.table("drive"), clock_hz);
   a.pid = read_pid(r.table("pid"), clock_hz);
   r.finish();
   return a;
+}
+
+PlannerSettings read_planner(Reader r) {
+  PlannerSettings p;
+  p.junction_deviation_m = r.number_or("junction_deviation_m", p.junction_deviation_m, Range::positive, "m");
+  p.arc_tolerance_m = r.number_or("arc_tolerance_m", p.arc_tolerance_m, Range::positive, "m");
+  p.ramp_piece_s = r.number_or("ramp_piece_s", p.ramp_piece_s, Range::positive, "s");
+  p.accel_window_s = r.number_or("accel_window_s", p.accel_window_s, Range::positive, "s");
+  p.queue_ahead_s = r.number_or("queue_ahead_s", p.queue_ahead_s, Range::positive, "s");
+  if (p.ramp_piece_s > p.accel_window_s)
+    throw r.error("ramp_piece_s", format_number(p.ramp_piece_s),
+                  "ramp_piece_s <= accel_window_s = " + format_number(p.accel_window_s));
+  r.finish();
+  return p;
 }
 
 std::string lower(std::string_view s) {
@@ -273,6 +304,7 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
     m.host_dac_range_v = r.number("dac_range_v", Range::positive, "V");
     r.finish();
   }
+  if (top.has("planner")) m.planner = read_planner(top.table("planner"));
   Reader axes = top.table("axis");
   const std::vector<std::string> names = {"x", "y", "z"};
   for (const std::string& k : axes.keys()) {

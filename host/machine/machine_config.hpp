@@ -59,6 +59,19 @@ struct AxisConfig {
   PidConfig pid;
   double max_following_error_m;
   double max_speed_m_s;
+  // Optional keys (older files load with these defaults).
+  double max_accel_m_s2 = 1.0;  // path planner: the axis's acceleration limit
+  double travel_min_m = -1.0;   // machine coordinates the axis may reach
+  double travel_max_m = 1.0;
+};
+
+// [planner], optional (docs/gcode.md, "Planner"). Defaults as Grbl's.
+struct PlannerSettings {
+  double junction_deviation_m = 1e-5;  // Grbl $11: 0.010 mm
+  double arc_tolerance_m = 2e-6;       // Grbl $12: 0.002 mm, for arcs the core cannot run whole
+  double ramp_piece_s = 0.004;         // a feed ramp is chopped into constant-feed pieces this long
+  double accel_window_s = 0.02;        // acceleration is limited as an average over this window
+  double queue_ahead_s = 0.25;         // motion kept queued on the board while streaming
 };
 
 struct MachineConfig {
@@ -66,6 +79,7 @@ struct MachineConfig {
   double clock_hz = 12e6;
   double plant_dt_s = 1e-6;
   std::vector<AxisConfig> axes;  // x, y, optional z, in that order
+  PlannerSettings planner;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;
