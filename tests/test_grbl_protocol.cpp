@@ -422,6 +422,12 @@ TEST(GrblProtocol, SoftLimitsAlarmAndLimitJogs) {
   EXPECT_EQ(r.send("G0X10\n"), "ALARM:2\r\n[MSG:Reset to continue]\r\n");
   EXPECT_EQ(r.send("G0X-1\n"), "");
   EXPECT_EQ(r.send("\x18"), kBannerLine + "[MSG:'$H'|'$X' to unlock]\r\n");
+  // The machine's own travel: the top end at 20 mm, 120 mm of travel (-100..20).
+  s.settings.travel_top_mm[2] = 20;
+  s.settings.max_travel_mm[2] = 120;
+  Rig z(s);
+  EXPECT_EQ(z.send("$X\nG0Z20\nG0Z-100\n"), "[MSG:Caution: Unlocked]\r\nok\r\nok\r\nok\r\n");
+  EXPECT_EQ(z.send("G0Z-100.001\n"), "ALARM:2\r\n[MSG:Reset to continue]\r\n");
 }
 
 TEST(GrblProtocol, ProgramPauseAndEnd) {

@@ -28,15 +28,26 @@ struct TempDir {
 TEST(GrblSettings, DefaultsComeFromTheMachine) {
   const auto m = mc::machine::default_machine();
   const Settings s = default_settings(m);
-  // configs/default.toml: 2000 counts/rev, gear 1, lead 5 mm, 0.5 m/s; no Z axis.
+  // configs/default.toml: 2000 counts/rev, gear 1, lead 5 mm; X and Y 0.5 m/s, 2 m/s^2,
+  // -0.3..0.3 m; Z 0.25 m/s, 1 m/s^2, -0.1..0.02 m; [planner] 1e-5 m and 2e-6 m.
   EXPECT_DOUBLE_EQ(s.counts_per_mm[0], 400);
   EXPECT_DOUBLE_EQ(s.counts_per_mm[2], 400);
   EXPECT_DOUBLE_EQ(s.max_rate_mm_min[1], 30000);
-  EXPECT_DOUBLE_EQ(s.accel_mm_s2[0], kDefaultAccelMmS2);
-  EXPECT_DOUBLE_EQ(s.max_travel_mm[2], kDefaultTravelMm);
+  EXPECT_DOUBLE_EQ(s.max_rate_mm_min[2], 15000);
+  EXPECT_DOUBLE_EQ(s.accel_mm_s2[0], 2000);
+  EXPECT_DOUBLE_EQ(s.accel_mm_s2[2], 1000);
+  EXPECT_NEAR(s.max_travel_mm[0], 600, 1e-9);
+  EXPECT_NEAR(s.max_travel_mm[2], 120, 1e-9);
+  EXPECT_NEAR(s.travel_top_mm[2], 20, 1e-9);
+  EXPECT_NEAR(s.junction_deviation_mm, 0.010, 1e-12);
+  EXPECT_NEAR(s.arc_tolerance_mm, 0.002, 1e-12);
   EXPECT_EQ(format_setting(s, 100), "$100=400.000");
   EXPECT_EQ(format_setting(s, 10), "$10=1");
   EXPECT_EQ(format_setting(s, 11), "$11=0.010");
+  // An axis the machine lacks takes the last axis' values.
+  auto two = mc::machine::default_machine();
+  two.axes.resize(2);
+  EXPECT_DOUBLE_EQ(default_settings(two).max_rate_mm_min[2], 30000);
 }
 
 TEST(GrblSettings, SetFollowsGrblsRules) {

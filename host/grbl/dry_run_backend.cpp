@@ -18,8 +18,9 @@ double distance(const gcode::Vec3& a, const gcode::Vec3& b) {
 }  // namespace
 
 DryRunBackend::DryRunBackend(int planner_blocks, gcode::Vec3 start) : blocks_(planner_blocks), pos_(start) {
+  // Until configure(): a slow, gentle machine.
   settings_.max_rate_mm_min = {6000, 6000, 6000};
-  settings_.accel_mm_s2 = {kDefaultAccelMmS2, kDefaultAccelMmS2, kDefaultAccelMmS2};
+  settings_.accel_mm_s2 = {500, 500, 500};
 }
 
 bool DryRunBackend::ready() const {

@@ -458,10 +458,13 @@ void Engine::execute(const std::string& line, const std::string& prefix) {
 
 bool Engine::soft_limit_violated(const std::vector<gcode::CanonCall>& calls) const {
   if (!stored_.settings.soft_limits) return false;
-  // Grbl's machine space: each axis from -max_travel to 0 (homing sets 0).
+  // Grbl's machine space is -max_travel..0 (homing sets 0 at the top end);
+  // here the top end is the machine's travel_max, so that the defaults are
+  // exactly the machine TOML's travel.
+  const Settings& set = stored_.settings;
   const auto outside = [&](const gcode::Vec3& p) {
     for (size_t i = 0; i < 3; ++i)
-      if (p[i] > 0 || p[i] < -stored_.settings.max_travel_mm[i]) return true;
+      if (p[i] > set.travel_top_mm[i] || p[i] < set.travel_top_mm[i] - set.max_travel_mm[i]) return true;
     return false;
   };
   for (const auto& c : calls) {

@@ -145,13 +145,16 @@ std::string toml_string(const std::string& s) {
 
 Settings default_settings(const mc::machine::MachineConfig& machine) {
   Settings s;
+  s.junction_deviation_mm = machine.planner.junction_deviation_m * 1000.0;
+  s.arc_tolerance_mm = machine.planner.arc_tolerance_m * 1000.0;
   for (size_t a = 0; a < 3; ++a) {
     if (machine.axes.empty()) break;
     const auto& ax = machine.axes[std::min(a, machine.axes.size() - 1)];
     s.counts_per_mm[a] = mc::machine::counts_per_m(ax) / 1000.0;
     s.max_rate_mm_min[a] = ax.max_speed_m_s * 60000.0;
-    s.accel_mm_s2[a] = kDefaultAccelMmS2;
-    s.max_travel_mm[a] = kDefaultTravelMm;
+    s.accel_mm_s2[a] = ax.max_accel_m_s2 * 1000.0;
+    s.max_travel_mm[a] = (ax.travel_max_m - ax.travel_min_m) * 1000.0;
+    s.travel_top_mm[a] = ax.travel_max_m * 1000.0;
   }
   return s;
 }

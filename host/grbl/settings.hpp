@@ -44,14 +44,16 @@ struct Settings {
   std::array<double, 3> max_rate_mm_min{};  // $110..$112
   std::array<double, 3> accel_mm_s2{};      // $120..$122
   std::array<double, 3> max_travel_mm{};    // $130..$132
+  // Not a Grbl setting: the machine coordinate of each axis' positive end
+  // (the machine TOML's travel_max_m). Soft limits allow travel_top_mm - $13x
+  // up to travel_top_mm; Grbl's 0 at the top is the case travel_top_mm = 0.
+  std::array<double, 3> travel_top_mm{};
 };
 
 // Defaults for `machine`: counts per mm from encoder, gear and lead, max rate
-// from max_speed_m_s; an axis the machine lacks takes the last axis' values.
-// Acceleration and travel are not in the machine TOML: kDefaultAccelMmS2 and
-// kDefaultTravelMm until the sender sets them.
-inline constexpr double kDefaultAccelMmS2 = 500;
-inline constexpr double kDefaultTravelMm = 200;
+// from max_speed_m_s, acceleration from max_accel_m_s2, travel from
+// travel_min_m..travel_max_m, junction deviation and arc tolerance from
+// [planner]; an axis the machine lacks takes the last axis' values.
 Settings default_settings(const mc::machine::MachineConfig& machine);
 
 // The setting numbers, in the order `$$` prints them.
