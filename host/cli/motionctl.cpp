@@ -74,6 +74,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_hostloop_command(app);
   mc::host::cli::add_gcode_command(app);
   mc::host::cli::add_run_command(app);
+  mc::host::cli::add_serve_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");
