@@ -72,7 +72,9 @@ struct MotionOut {
 enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2, SMP_OUT = 3, SMP_FOLLOW = 4 };
 constexpr int SMP_FIELDS = 8;  // per axis: the address has three field bits
 
-template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8>
+// IDX_RAM: the decoders' index latches in block RAM (rtl/quad_decoder.v), as
+// the board builds them.
+template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8, bool IDX_RAM = false>
 class MotionCore {
   static_assert(NAXES >= 1 && NAXES <= 3, "motion_core: NAXES must be 1..3");
   static_assert(PWM_BITS >= 1 && PWM_BITS <= 15, "motion_core: PWM_BITS must be 1..15");
@@ -81,6 +83,7 @@ class MotionCore {
   using In = MotionIn<NAXES>;
   using Out = MotionOut<NAXES>;
   using Pid = PidCoreClocked<NAXES>;
+  using Decoder = QuadDecoder<FILT_W, 16, 32, 16, IDX_RAM>;
   static constexpr int latency = Pid::latency;
   // The sweep clock (Pid::sweep_clock) in which pid_core streams axis a's
   // output word, which the drive takes at that clock's edge: slot a + 1,
@@ -126,7 +129,10 @@ class MotionCore {
   }
 
   void clock(const In& in) {
-    Regs n = r_;  // nonblocking: every right-hand side reads r_
+    // Nonblocking: every right-hand side reads r, this clock's registers;
+    // the next values go straight into r_ (n).
+    const Regs r = r_;
+    Regs& n = r_;
     int32_t cmd[NAXES], fb[NAXES];
     for (int a = 0; a < NAXES; ++a) {
       cmd[a] = ip_.pos(a);
@@ -145,16 +151,16 @@ class MotionCore {
     n.smp_rdata = read_bank(in.smp_raddr);
     if (!in.rst && done) {
       for (int a = 0; a < NAXES; ++a) {
-        int32_t* w = n.bank[!r_.pb][a];
-        w[SMP_CMD] = r_.in_cmd[a];
-        w[SMP_FB] = r_.in_fb[a];
+        int32_t* w = bank_[!r.pb][a];
+        w[SMP_CMD] = r.in_cmd[a];
+        w[SMP_FB] = r.in_fb[a];
         w[SMP_ERR] = pid_.core().err(a);
         w[SMP_OUT] = int32_t(uint32_t(uint16_t(pid_.core().u(a))) | uint32_t(pid_.core().sat(a)) << 16 |
                              uint32_t(pid_.enabled(a)) << 17);
-        const int64_t follow = int64_t(r_.in_cmd[a]) - r_.in_fb[a];
+        const int64_t follow = int64_t(r.in_cmd[a]) - r.in_fb[a];
         w[SMP_FOLLOW] = int32_t(std::clamp<int64_t>(follow, INT32_MIN, INT32_MAX));
       }
-      n.pb = !r_.pb;
+      n.pb = !r.pb;
     }
     for (int a = 0; a < NAXES; ++a) {
       if (in.rst) {
@@ -170,15 +176,15 @@ class MotionCore {
     }
 
     // Drive stage.
-    n.pcnt = in.rst ? 0 : (r_.pcnt + 1) & pwm_mask;
+    n.pcnt = in.rst ? 0 : (r.pcnt + 1) & pwm_mask;
     for (int a = 0; a < NAXES; ++a) {
-      const int16_t u = u_sel(in, a);
+      const int16_t u = u_sel(r, in, a);
       if (in.rst) {
         n.drv_u[a] = 0;
         n.pwm[a] = n.dir[a] = n.drv_en[a] = false;
       } else {
         n.drv_u[a] = u;
-        n.pwm[a] = duty(u) > r_.pcnt;
+        n.pwm[a] = duty(u) > r.pcnt;
         n.dir[a] = u < 0;
         n.drv_en[a] = drv_en(in, a);
       }
@@ -200,8 +206,15 @@ class MotionCore {
     else
       ip_.clock(ii);
 
-    for (int a = 0; a < NAXES; ++a) dec_[a].step(quad_in(in, a, tick));
-    r_ = n;
+    // A settled decoder only ages its last edge: skip(1) is that clock, for
+    // much less work than step() (the clocks with pin activity step).
+    for (int a = 0; a < NAXES; ++a) {
+      const QuadIn qi = quad_in(in, a, tick);
+      if (dec_[a].quiet(qi))
+        dec_[a].skip(1);
+      else
+        dec_[a].step(qi);
+    }
   }
 
   // Fast-forward for long simulations: true when n clocks with these inputs
@@ -220,7 +233,7 @@ class MotionCore {
     if (!ip_.quiet(ii) || !pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
     for (int a = 0; a < NAXES; ++a) {
       if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
-      if (r_.drv_u[a] != u_sel(in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
+      if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
     }
     return true;
   }
@@ -234,19 +247,29 @@ class MotionCore {
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
   }
   // A word of the published sample (what smp_raddr would read).
-  int32_t sample(int a, SampleField f) const { return r_.bank[r_.pb][a][f]; }
+  int32_t sample(int a, SampleField f) const { return bank_[r_.pb][a][f]; }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }
 
   const Pid& pid() const { return pid_; }
   const InterpCore<FIFO_AW>& interp() const { return ip_; }
-  const QuadDecoder<FILT_W, 16, 32>& decoder(int a) const { return dec_[a]; }
+  const Decoder& decoder(int a) const { return dec_[a]; }
+  // Single outputs of the current clock, for users that need a few of them
+  // every clock (outputs() gathers all).
+  bool pwm(int a) const { return r_.pwm[a]; }
+  bool dir(int a) const { return r_.dir[a]; }
+  bool drv_en(int a) const { return r_.drv_en[a]; }
+  int16_t drv_cmd(int a) const { return r_.drv_cmd[a]; }
+  uint32_t smp_rdata() const { return r_.smp_rdata; }
 
  private:
   static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
 
-  uint32_t read_bank(uint8_t raddr) const { return uint32_t(r_.bank[r_.pb][raddr >> 3 & 3][raddr & 7]); }
-  int16_t u_sel(const In& in, int a) const { return !in.drv_allow[a] ? int16_t(0) : r_.drv_cmd[a]; }
+  uint32_t read_bank(uint8_t raddr) const { return uint32_t(bank_[r_.pb][raddr >> 3 & 3][raddr & 7]); }
+  struct Regs;
+  static int16_t u_sel(const Regs& r, const In& in, int a) {
+    return !in.drv_allow[a] ? int16_t(0) : r.drv_cmd[a];
+  }
   bool drv_en(const In& in, int a) const { return in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]); }
   static typename Pid::In pid_in(const In& in, const int32_t* cmd, const int32_t* fb) {
     typename Pid::In pi;
@@ -280,7 +303,6 @@ class MotionCore {
 
   struct Regs {
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
-    int32_t bank[2][4][SMP_FIELDS] = {};  // [bank][axis][field], as the RTL's 64 words
     bool pb = false;
     uint32_t smp_rdata = 0;
     int16_t drv_cmd[NAXES] = {};
@@ -289,9 +311,10 @@ class MotionCore {
     int16_t drv_u[NAXES] = {};
     bool pwm[NAXES] = {}, dir[NAXES] = {}, drv_en[NAXES] = {};
   };
+  int32_t bank_[2][4][SMP_FIELDS] = {};  // the sample RAM: [bank][axis][field], as the RTL's 64 words
   Pid pid_;
   InterpCore<FIFO_AW> ip_;
-  QuadDecoder<FILT_W, 16, 32> dec_[NAXES];
+  Decoder dec_[NAXES];
   Regs r_;
 };
 

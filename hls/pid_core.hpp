@@ -251,6 +251,8 @@ class PidCoreClocked {
     return !in.rst && !in.we && !in.re && !clr_ && !run_ && !tick_ && !done_ && !rvalid_ && tcnt_ > n;
   }
   void skip(uint32_t n) { tcnt_ -= n; }
+  // The sample timer: the tick comes in the clock in which it is 1.
+  uint32_t timer() const { return tcnt_; }
 
   void clock(const In& in) {
     if (in.rst) {
