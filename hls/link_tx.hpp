@@ -125,10 +125,12 @@ struct LinkTx {
     u_crc.clock(s == S_IDLE, crc_en, b);
   }
 
-  // A clock with this input changes nothing: idle, settled, nothing written.
+  // A clock with this input changes nothing: idle with no start, or a
+  // frame waiting for uart_tx's ready; nothing written, the RAM's output
+  // and the CRC settled.
   bool quiet(const LinkTxIn& in) const {
-    return !in.rst && !in.we && !in.start && st == S_IDLE && !valid_o && !hold && q == ram[ra] &&
-           u_crc.at_init();
+    if (in.rst || in.we || valid_o || hold || q != ram[ra]) return false;
+    return st == S_IDLE ? !in.start && u_crc.at_init() : !in.ready && !u_crc.busy_o();
   }
 };
 

@@ -89,17 +89,20 @@ class McBoard {
 
   // ---- fast-forward ----------------------------------------------------------
   // Clocks (up to limit) with these inputs held that change nothing but
-  // counters and timers: the line idle (or a frame waiting for its next byte
-  // before the timeout), no frame being worked on or sent, no sample due, the
-  // decoders settled, no fault. skip(n) then does n of them at once, leaving
-  // exactly the state of n clocks; 0 means clock() this one.
+  // counters and timers: the UARTs idle or inside a bit, the link idle or
+  // waiting (for the next byte of a frame before the timeout, for uart_tx),
+  // no frame being worked on, no sample due, the decoders settled, no
+  // fault. skip(n) then does n of them at once, leaving exactly the state of
+  // n clocks; 0 means clock() this one.
   uint32_t quiet(const McBoardIn& in, uint32_t limit) {
-    if (limit == 0 || in.rst || !u_urx.quiet(in.rx) || !u_utx.quiet(u_ltx.valid_o)) return 0;
+    if (limit == 0 || in.rst) return 0;
+    uint32_t n = u_urx.quiet(in.rx, limit);
+    if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
+    if (n == 0 || u_regs.r.xs != Regs::X_IDLE || u_core.pid().busy()) return 0;
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
-    if (u_regs.r.xs != Regs::X_IDLE || u_ltx.busy_o() || u_core.pid().busy()) return 0;
     Wires& w = w_;
     wires(in, w);
-    uint32_t n = u_lrx.quiet(w.lrx, limit);
+    n = u_lrx.quiet(w.lrx, n);
     if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet(w.regs)) return 0;
     n = u_safety.quiet(w.safety, n);
     const uint32_t t = u_core.pid().timer();  // no tick in the n clocks: t > n
@@ -110,6 +113,8 @@ class McBoard {
     return n;
   }
   void skip(uint32_t n) {
+    u_urx.skip(n);
+    u_utx.skip(n);
     u_lrx.skip(n);
     u_safety.skip(n);
     u_core.skip(n);

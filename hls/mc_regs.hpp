@@ -573,13 +573,14 @@ class McRegs {
 
   // ---- fast-forward --------------------------------------------------------
   // A clock with these inputs changes no register nor the shadow RAM: the
-  // executor idle, no reply or telemetry on its way, no counter pending, the
-  // walker and every pipeline settled, no strobe. The register file has no
-  // free-running counter, so any number of such clocks changes nothing.
+  // executor idle, no frame to hand to link_tx (none waiting, or link_tx
+  // busy with one), no counter pending, the walker and every pipeline
+  // settled, no strobe. The register file has no free-running counter, so
+  // any number of such clocks changes nothing.
   bool quiet(const In& in) const {
-    if (in.rst || in.frame || in.crc_err || in.framing || in.junk || in.done || in.tx_busy) return false;
-    if (r.xs != X_IDLE || r.rep_pend || r.rep_sending || r.tlm_pend || r.tlm_sending || r.tx_start_o)
-      return false;
+    if (in.rst || in.frame || in.crc_err || in.framing || in.junk || in.done) return false;
+    if (r.xs != X_IDLE || r.tx_start_o) return false;
+    if (!in.tx_busy && (r.rep_pend || r.rep_sending || r.tlm_pend || r.tlm_sending)) return false;
     if (r.drop_busy || r.cnt_nak_inc || r.cnt_dup_inc || r.cnt_pend != 0 || r.cu1 || r.cu2 || r.cu_c1 != 4 ||
         r.cu_c2 != 4)
       return false;

@@ -56,8 +56,17 @@ struct UartRx {
     }
   }
 
-  // A clock with this line level changes nothing: idle, the line high.
-  bool quiet(bool rx_i) const { return !busy && rx_i && !valid_o && !ferr_o; }
+  // Clocks (up to limit) that change nothing but the bit timer: idle with
+  // the line high, or between two samples of a byte (the line is not
+  // looked at there). skip(n) does them.
+  uint32_t quiet(bool rx_i, uint32_t limit) const {
+    if (valid_o || ferr_o) return 0;
+    if (!busy) return rx_i ? limit : 0;
+    return cnt < limit ? cnt : limit;
+  }
+  void skip(uint32_t n) {
+    if (busy) cnt -= n;
+  }
 };
 
 }  // namespace mc

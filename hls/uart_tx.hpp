@@ -48,8 +48,15 @@ struct UartTx {
     }
   }
 
-  // A clock with this input changes nothing.
-  bool quiet(bool valid_i) const { return !busy && !valid_i; }
+  // Clocks (up to limit) that change nothing but the bit timer: idle with
+  // nothing to send, or inside a bit. skip(n) does them.
+  uint32_t quiet(bool valid_i, uint32_t limit) const {
+    if (!busy) return valid_i ? 0 : limit;
+    return cnt < limit ? cnt : limit;
+  }
+  void skip(uint32_t n) {
+    if (busy) cnt -= n;
+  }
 };
 
 }  // namespace mc
