@@ -98,15 +98,15 @@ class McBoard {
     if (limit == 0 || in.rst) return 0;
     uint32_t n = u_urx.quiet(in.rx, limit);
     if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
-    if (n == 0 || u_regs.r.xs != Regs::X_IDLE || u_core.pid().busy()) return 0;
+    if (n == 0 || u_regs.r.xs != Regs::X_IDLE) return 0;
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
     Wires& w = w_;
     wires(in, w);
     n = u_lrx.quiet(w.lrx, n);
     if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet(w.regs)) return 0;
     n = u_safety.quiet(w.safety, n);
-    const uint32_t t = u_core.pid().timer();  // no tick in the n clocks: t > n
-    if (t <= n) n = t - 1;
+    const uint32_t t = u_core.quiet_limit();  // no tick, drive update or done in the n clocks
+    if (t < n) n = t;
     if (n == 0 || !u_core.quiet(core_in_, n)) return 0;
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;

@@ -218,12 +218,17 @@ class MotionCore {
   }
 
   // Fast-forward for long simulations: true when n clocks with these inputs
-  // would change nothing but counters (no tick or sweep due, decoders
-  // settled, interpolator idle, drive value unchanged); skip(in, n) then does
-  // them at once (the inputs held are those quiet() was given). The PWM pin
-  // ends as the last of those clocks leaves it.
+  // would change nothing but counters (no tick, drive update or done due,
+  // decoders settled, interpolator idle, drive value unchanged); skip(in, n)
+  // then does them at once (the inputs held are those quiet() was given).
+  // The PWM pin ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
+    if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
+      const int s = pid_.sweep_clock();
+      for (int a = 0; a < NAXES; ++a)
+        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
+    }
     if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     InterpIn ii;
     ii.wr = in.seg_wr;
@@ -245,6 +250,16 @@ class MotionCore {
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
+  }
+  // The most clocks the sample timer and the sweep allow quiet(): up to the
+  // next tick, drive update or done.
+  uint32_t quiet_limit() const {
+    uint32_t l = pid_.quiet_limit();
+    const int s = pid_.sweep_clock();
+    if (s != 0)
+      for (int a = 0; a < NAXES; ++a)
+        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < l) l = uint32_t(drv_clock(a) - s);
+    return l;
   }
   // A word of the published sample (what smp_raddr would read).
   int32_t sample(int a, SampleField f) const { return bank_[r_.pb][a][f]; }
