@@ -25,15 +25,26 @@ struct Crc16Ccitt {
       sh = data_i;
       n = 8;
     } else if (n != 0) {
-      const bool fb = ((crc_o >> 15) ^ (sh >> 7)) & 1;
-      crc_o = uint16_t(crc_o << 1 ^ (fb ? 0x1021 : 0));
-      sh = uint8_t(sh << 1);
-      --n;
+      shift();
     }
+  }
+
+  // k clocks with init_i and en_i low: the bits left shift in, then nothing.
+  void skip(uint32_t k) {
+    for (uint32_t i = 0; i < 8; ++i)
+      if (i < k && n != 0) shift();
   }
 
   // The state a clock with init_i leaves: true when it is already there.
   bool at_init() const { return crc_o == 0xFFFF && n == 0; }
+
+ private:
+  void shift() {
+    const bool fb = ((crc_o >> 15) ^ (sh >> 7)) & 1;
+    crc_o = uint16_t(crc_o << 1 ^ (fb ? 0x1021 : 0));
+    sh = uint8_t(sh << 1);
+    --n;
+  }
 };
 
 }  // namespace mc

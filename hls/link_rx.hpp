@@ -114,18 +114,20 @@ struct LinkRx {
     u_crc.clock(s == S_HUNT, crc_en, in.byte);
   }
 
-  // Clocks (up to limit) that change nothing but the stall timer, with no
-  // byte arriving: hunting with every strobe low, or inside a frame waiting
-  // for its next byte before the timeout. skip(n) does them.
+  // Clocks (up to limit) that change nothing but the stall timer and the
+  // CRC's shifting, with no byte arriving: hunting with every strobe low, or
+  // inside a frame waiting for its next byte before the timeout. skip(n)
+  // does them.
   uint32_t quiet(const LinkRxIn& in, uint32_t limit) const {
     if (in.rst || in.valid || in.ferr || frame_o || crc_err_o || framing_o || junk_o) return 0;
-    if (pay_rdata_o != pay[in.pay_raddr] || u_crc.busy_o()) return 0;
+    if (pay_rdata_o != pay[in.pay_raddr]) return 0;
     if (st == S_HUNT) return idle == 0 && u_crc.at_init() ? limit : 0;
     const uint32_t left = TIMEOUT - idle;  // the clock with idle == TIMEOUT drops the frame
     return left < limit ? left : limit;
   }
   void skip(uint32_t n) {
     if (st != S_HUNT) idle += n;
+    u_crc.skip(n);
   }
 };
 

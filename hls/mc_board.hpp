@@ -116,6 +116,7 @@ class McBoard {
     u_urx.skip(n);
     u_utx.skip(n);
     u_lrx.skip(n);
+    u_ltx.skip(n);
     u_safety.skip(n);
     u_core.skip(n);
     if constexpr (HANDWHEEL) u_hw.skip(n);

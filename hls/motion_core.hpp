@@ -201,10 +201,18 @@ class MotionCore {
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
     for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
-    if (in.rst)
+    // An idle interpolator stands still after two quiet clocks
+    // (InterpCore::quiet); from then on its clock is skipped.
+    if (in.rst) {
       ip_.reset();
-    else
+      ip_still_ = 0;
+    } else if (!ip_.quiet(ii)) {
       ip_.clock(ii);
+      ip_still_ = 0;
+    } else if (ip_still_ < 2) {
+      ip_.clock(ii);
+      ++ip_still_;
+    }
 
     // A settled decoder only ages its last edge: skip(1) is that clock, for
     // much less work than step() (the clocks with pin activity step).
@@ -244,7 +252,10 @@ class MotionCore {
   }
   void skip(uint32_t n) {
     pid_.skip(n);
-    ip_.skip(n);
+    if (ip_still_ < 2) {
+      ip_.skip(n);
+      ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
+    }
     for (int a = 0; a < NAXES; ++a) {
       dec_[a].skip(n);
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
@@ -329,6 +340,7 @@ class MotionCore {
   int32_t bank_[2][4][SMP_FIELDS] = {};  // the sample RAM: [bank][axis][field], as the RTL's 64 words
   Pid pid_;
   InterpCore<FIFO_AW> ip_;
+  uint8_t ip_still_ = 0;  // quiet interpolator clocks in a row, up to 2
   Decoder dec_[NAXES];
   Regs r_;
 };

@@ -65,16 +65,24 @@ class MotioncoreIcebreaker {
     s2 = s1;
     s1 = sync_in(p);
     if (rst()) por = uint8_t(por + 1);
+    idle_ = 0;
   }
 
   // How many of the next clocks (up to limit) with these pins held change
   // nothing but counters and timers; advance(p, n) does n <= that many at
   // once, leaving exactly the state n step(p) would leave.
   uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) {
-    if (rst() || s1 != sync_in(p) || s2 != s1) return 0;
-    return u_board.quiet(board_in(p), limit);
+    const uint32_t w = pins_word(p);
+    if (idle_ == 0 || w != idle_pins_) {  // else: what is left of the stretch found before
+      idle_pins_ = w;
+      idle_ = rst() || s1 != sync_in(p) || s2 != s1 ? 0 : u_board.quiet(board_in(p), 0xFFFFFFFFu);
+    }
+    return idle_ < limit ? idle_ : limit;
   }
-  void advance(const IcebreakerPins&, uint32_t n) { u_board.skip(n); }
+  void advance(const IcebreakerPins& p, uint32_t n) {
+    u_board.skip(n);
+    idle_ = pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
+  }
 
   // n clocks with these pins held: step(p) where something happens,
   // advance() over the rest. Returns how many clocks were skipped.
@@ -117,6 +125,19 @@ class MotioncoreIcebreaker {
     b.hw_b = p.hw_b;
     return b;
   }
+  static uint32_t pins_word(const IcebreakerPins& p) {
+    uint32_t w = uint32_t(p.rx) | uint32_t(p.btn_n) << 1 | uint32_t(p.estop) << 2 | uint32_t(p.hw_a) << 3 |
+                 uint32_t(p.hw_b) << 4;
+    for (int a = 0; a < 3; ++a)
+      w |= (uint32_t(p.enc_a[a]) | uint32_t(p.enc_b[a]) << 1 | uint32_t(p.enc_z[a]) << 2 |
+            uint32_t(p.lim[a]) << 3)
+           << (5 + 4 * a);
+    return w;
+  }
+
+  // The idle stretch found last (a stretch stays idle to its end while the
+  // pins hold): clocks left, and the pins it was found with.
+  uint32_t idle_ = 0, idle_pins_ = 0;
 };
 
 }  // namespace mc
