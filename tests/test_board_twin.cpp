@@ -1043,12 +1043,18 @@ void configure(const std::vector<hp::Frame>& frames, IcebreakerPins& p, Clock&& 
   for (int i = 0; i < 20'000; ++i) clock();
 }
 
+// The best of three runs of n clocks: on a shared machine the others' load
+// only ever slows a run down.
 template <typename F>
 double per_second(uint64_t n, F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f(n);
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return double(n) / s;
+  double best = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f(n);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    best = std::max(best, double(n) / s);
+  }
+  return best;
 }
 
 TEST(BoardTwinSpeed, PrintsClocksPerSecond) {
@@ -1066,7 +1072,7 @@ TEST(BoardTwinSpeed, PrintsClocksPerSecond) {
       top->eval();
     };
     configure(workload(decim), p, vclock);
-    const double v = per_second(300'000, [&](uint64_t n) {
+    const double v = per_second(200'000, [&](uint64_t n) {
       for (uint64_t i = 0; i < n; ++i) vclock();
     });
     const bool armed = top->rootp->motioncore_icebreaker__DOT__u_board__DOT__armed;
@@ -1078,18 +1084,18 @@ TEST(BoardTwinSpeed, PrintsClocksPerSecond) {
     configure(workload(decim), p, [&] { t.step(p); });
     EXPECT_EQ(t.u_board.u_safety.armed_o, armed);
     Twin t2 = t;
-    const double s = per_second(3'000'000, [&](uint64_t n) {
+    const double s = per_second(1'000'000, [&](uint64_t n) {
       for (uint64_t i = 0; i < n; ++i) t.step(p);
     });
     uint64_t skipped = 0;
-    const double r = per_second(24'000'000, [&](uint64_t n) {
+    const double r = per_second(12'000'000, [&](uint64_t n) {
       for (uint64_t i = 0; i < n; i += 12) skipped += t2.run(p, 12);
     });
     std::printf(
         "  telemetry %-9s Verilated %6.2f M (%5.2fx)  twin step() %6.2f M (%5.2fx)  twin run() %7.2f M "
         "(%6.2fx, %.1f %% skipped)  armed %d\n",
         decim ? "every 10:" : "off:", v / 1e6, v / double(kClkHz), s / 1e6, s / double(kClkHz), r / 1e6,
-        r / double(kClkHz), 100.0 * double(skipped) / 24e6, int(armed));
+        r / double(kClkHz), 100.0 * double(skipped) / 36e6, int(armed));
   }
 }
 
