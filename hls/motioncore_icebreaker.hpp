@@ -86,21 +86,28 @@ class MotioncoreIcebreaker {
 
   // n clocks with these pins held: step(p) where something happens,
   // advance() over the rest. Returns how many clocks were skipped.
-  uint64_t run(const IcebreakerPins& p, uint64_t n) {
-    uint64_t skipped = 0;
-    while (n > 0) {
-      const uint32_t lim = n > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(n);
-      const uint32_t k = idle_clocks(p, lim);
+  // on_step(i) is called after each clock stepped, i the clocks done so far
+  // in this call (that one included). TX changes only in stepped clocks, so
+  // a host that decodes the line reads tx() there and knows when it changed.
+  template <typename OnStep>
+  uint64_t run(const IcebreakerPins& p, uint64_t n, OnStep&& on_step) {
+    uint64_t skipped = 0, done = 0;
+    while (done < n) {
+      const uint64_t left = n - done;
+      const uint32_t k = idle_clocks(p, left > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(left));
       if (k > 0) {
         advance(p, k);
         skipped += k;
-        n -= k;
+        done += k;
       } else {
         step(p);
-        --n;
+        on_step(++done);
       }
     }
     return skipped;
+  }
+  uint64_t run(const IcebreakerPins& p, uint64_t n) {
+    return run(p, n, [](uint64_t) {});
   }
 
  private:
@@ -136,7 +143,8 @@ class MotioncoreIcebreaker {
   }
 
   // The idle stretch found last (a stretch stays idle to its end while the
-  // pins hold): clocks left, and the pins it was found with.
+  // pins hold): clocks left, and the pins it was found with. A test that
+  // writes registers by hand steps a clock before it advances again.
   uint32_t idle_ = 0, idle_pins_ = 0;
 };
 

@@ -955,11 +955,24 @@ TEST(BoardTwin, RunEqualsSteps) {
   Twin ref, fast;
   IcebreakerPins p;
   uint64_t clocks = 0, skipped = 0;
+  std::vector<std::pair<uint64_t, bool>> stepped;  // clock in the stretch, TX after it
+  uint64_t tx_edges = 0;
   while (clocks < 1'500'000) {
     const uint32_t n = host.line(1 + uint32_t(rng() % (rng() % 3 ? 12 : 5000)), p.rx);
     pins.clock(p);
-    skipped += fast.run(p, n);
-    for (uint32_t i = 0; i < n; ++i) ref.step(p);
+    stepped.clear();
+    skipped += fast.run(p, n, [&](uint64_t i) { stepped.emplace_back(i, fast.tx()); });
+    // Every TX edge falls in a clock run() stepped, with the same level.
+    size_t j = 0;
+    for (uint32_t i = 1; i <= n; ++i) {
+      const bool tx = ref.tx();
+      ref.step(p);
+      while (j < stepped.size() && stepped[j].first < i) ++j;
+      if (ref.tx() == tx) continue;
+      ++tx_edges;
+      ASSERT_TRUE(j < stepped.size() && stepped[j].first == i && stepped[j].second == ref.tx())
+          << "a TX edge inside an advance, clock " << clocks + i;
+    }
     clocks += n;
     ASSERT_TRUE(same_pins(ref, fast)) << "clock " << clocks;
     if (rng() % 64 == 0) {
@@ -967,9 +980,10 @@ TEST(BoardTwin, RunEqualsSteps) {
     }
   }
   ASSERT_EQ(state_diff(ref, fast), "");
-  std::printf("run (seed %llu): %llu clocks, %llu skipped\n", (unsigned long long)seed,
-              (unsigned long long)clocks, (unsigned long long)skipped);
+  std::printf("run (seed %llu): %llu clocks, %llu skipped, %llu TX edges\n", (unsigned long long)seed,
+              (unsigned long long)clocks, (unsigned long long)skipped, (unsigned long long)tx_edges);
   EXPECT_GT(skipped, clocks / 20);
+  EXPECT_GT(tx_edges, 1000u);
 }
 
 // A frame cut short is dropped when the byte timeout expires, also when
