@@ -97,6 +97,16 @@ constexpr uint32_t ID_MAGIC = 0x4D430000;  // "MC" in the high half, VERSION in 
 constexpr int INFO_NAXES_LSB = 0;    // 4 bits
 constexpr int INFO_FIFO_AW_LSB = 4;  // 4 bits
 constexpr int INFO_VERSION_LSB = 8;  // 8 bits
+// The INFO fields of a value read from the register.
+constexpr int info_naxes(uint32_t info) {
+  return int(info >> INFO_NAXES_LSB & 0xFu);
+}
+constexpr int info_fifo_aw(uint32_t info) {
+  return int(info >> INFO_FIFO_AW_LSB & 0xFu);
+}
+constexpr int info_version(uint32_t info) {
+  return int(info >> INFO_VERSION_LSB & 0xFFu);
+}
 // STATUS (live)
 constexpr int ST_ARMED = 0;
 constexpr int ST_ESTOP_IN = 1;

@@ -11,6 +11,7 @@ PKGS=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   gnuplot-nox
   clang-format clang-tidy ccache
+  linuxcnc-uspace
 )
 
 missing=()

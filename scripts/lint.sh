@@ -11,7 +11,7 @@ scripts/lint_rtl.sh
 test -f "$build/compile_commands.json" || cmake -S . -B "$build" >/dev/null
 # Generated Verilator sources must exist for the TUs that include them.
 cmake --build "$build" >/dev/null
-files=$(ls host/*.cpp sim/*.cpp tests/test_sim_plant.cpp tests/test_sim_config.cpp tests/test_pid_twin.cpp \
+files=$(ls host/*/*.cpp sim/*/*.cpp tests/test_layers.cpp tests/test_sim_plant.cpp tests/test_sim_config.cpp tests/test_pid_twin.cpp \
   tests/test_pid_numerics.cpp tests/test_mul_align_rtl.cpp tests/test_cosim.cpp tests/test_motion_core_twin.cpp \
   tests/test_interp_twin.cpp tests/test_interp_rtl.cpp tests/test_motion_core_rtl.cpp \
   tests/test_quad_decoder_twin.cpp tests/test_quad_decoder_rtl.cpp tests/test_quad_rate_rtl.cpp \

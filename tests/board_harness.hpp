@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "Vmotioncore_icebreaker.h"
-#include "board_regs.hpp"
-#include "protocol.hpp"
-#include "uart_model.hpp"
+#include "hls/board_regs.hpp"
+#include "host/link/protocol.hpp"
+#include "sim/vboard/uart_model.hpp"
 #include "vl_context.hpp"
 
 namespace mc::test {

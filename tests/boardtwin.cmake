@@ -4,4 +4,4 @@
 # both, printed.
 
 mc_gtest(test_board_twin rtl test_board_twin.cpp)
-target_link_libraries(test_board_twin PRIVATE mc_hls mc_host vboard)
+target_link_libraries(test_board_twin PRIVATE mc_hls mc_motion vboard)

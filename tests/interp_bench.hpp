@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "errors.hpp"
-#include "interp_plan.hpp"
+#include "host/base/errors.hpp"
+#include "host/motion/interp_plan.hpp"
 
 namespace mc::test {
 

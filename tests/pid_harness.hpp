@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-#include "pid_core.hpp"
+#include "hls/pid_core.hpp"
 #include "verilated.h"
 #include "vl_context.hpp"
 

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <string>
 
-#include "quad_decoder.hpp"
+#include "hls/quad_decoder.hpp"
 
 namespace mc::test {
 

@@ -24,7 +24,7 @@ mc_verilate(vquad_decoder_idxram TOP quad_decoder PREFIX Vquad_decoder_idxram
 mc_gtest(test_pid_twin unit test_pid_twin.cpp)
 target_link_libraries(test_pid_twin PRIVATE mc_hls)
 mc_gtest(test_interp_twin unit test_interp_twin.cpp)
-target_link_libraries(test_interp_twin PRIVATE mc_hls mc_host)
+target_link_libraries(test_interp_twin PRIVATE mc_hls mc_motion)
 mc_gtest(test_quad_decoder_twin unit test_quad_decoder_twin.cpp)
 target_link_libraries(test_quad_decoder_twin PRIVATE mc_hls)
 
@@ -32,7 +32,7 @@ target_link_libraries(test_quad_decoder_twin PRIVATE mc_hls)
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
 target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1)
 mc_gtest(test_interp_rtl rtl test_interp_rtl.cpp)
-target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_host vinterp_core)
+target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_motion vinterp_core)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
 target_link_libraries(test_mul_align_rtl PRIVATE mc_hls vmul_align)
 mc_gtest(test_quad_decoder_rtl rtl test_quad_decoder_rtl.cpp)
@@ -61,25 +61,24 @@ set_tests_properties(synth_quad_decoder_ice40 PROPERTIES LABELS synth TIMEOUT 60
 
 # Fixed point against double precision (needs the host's coefficient design).
 mc_gtest(test_pid_numerics unit test_pid_numerics.cpp)
-target_link_libraries(test_pid_numerics PRIVATE mc_hls mc_host)
+target_link_libraries(test_pid_numerics PRIVATE mc_hls mc_control)
 mc_gtest(test_motion_core_rtl rtl test_motion_core_rtl.cpp)
-target_link_libraries(test_motion_core_rtl PRIVATE mc_hls mc_host mc_sim vmotion_core vmotion_core2)
+target_link_libraries(test_motion_core_rtl PRIVATE mc_hls mc_cosim vmotion_core vmotion_core2)
 mc_gtest(test_motion_core_twin unit test_motion_core_twin.cpp)
-target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_sim)
+target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_cosim)
 
 # The iCEBreaker top with its link: a host speaks the protocol bit by bit on
 # the UART pins (tests/board_harness.hpp, sim/uart_model.hpp).
 # (The Verilated top, vboard, is the virtual board's too: sim/CMakeLists.txt.)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
-target_link_libraries(test_board_rtl PRIVATE mc_hls mc_host vboard)
-target_include_directories(test_board_rtl PRIVATE ${CMAKE_SOURCE_DIR}/sim)
+target_link_libraries(test_board_rtl PRIVATE mc_hls mc_motion vboard)
 
 # The generated register map is up to date; the protocol codec.
 mc_gtest(test_board_regs unit test_board_regs.cpp)
-target_link_libraries(test_board_regs PRIVATE mc_host)
+target_link_libraries(test_board_regs PRIVATE mc_link)
 target_compile_definitions(test_board_regs PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
 mc_gtest(test_protocol unit test_protocol.cpp)
-target_link_libraries(test_protocol PRIVATE mc_host)
+target_link_libraries(test_protocol PRIVATE mc_link)
 
 # The board flow as `make synth` runs it: three axes and the handwheel,
 # bitstream, fit and timing at the real clock (docs/board.md).

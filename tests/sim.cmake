@@ -1,10 +1,10 @@
 # Plant models and machine config (sim/), and motionctl plant (label: unit).
 
 mc_gtest(test_sim_plant unit test_sim_plant.cpp)
-target_link_libraries(test_sim_plant PRIVATE mc_sim)
+target_link_libraries(test_sim_plant PRIVATE mc_plant)
 
 mc_gtest(test_sim_config unit test_sim_config.cpp)
-target_link_libraries(test_sim_config PRIVATE mc_sim)
+target_link_libraries(test_sim_config PRIVATE mc_plant)
 
 mc_gtest(test_cli_plant unit test_cli_plant.cpp)
 target_link_libraries(test_cli_plant PRIVATE nlohmann_json::nlohmann_json)

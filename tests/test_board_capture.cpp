@@ -1,14 +1,14 @@
 // Telemetry captures (host/board_capture.hpp) against a scripted board: the
 // decimation the link can carry, the sample counter unwrapped across its
 // 16-bit wrap, and a skipped frame reported as a gap, never filled in.
-#include "board_capture.hpp"
+#include "host/link/board_capture.hpp"
 
 #include <gtest/gtest.h>
 
 #include <deque>
 #include <vector>
 
-#include "protocol.hpp"
+#include "host/link/protocol.hpp"
 
 namespace mc::host {
 namespace {

@@ -8,11 +8,13 @@
 #include <random>
 #include <thread>
 
-#include "board_link.hpp"
-#include "board_ops.hpp"
-#include "interp_plan.hpp"
-#include "serial_port.hpp"
-#include "virtual_board.hpp"
+#include "host/control/board_gains.hpp"
+#include "host/link/board_link.hpp"
+#include "host/link/board_state.hpp"
+#include "host/link/serial_port.hpp"
+#include "host/motion/board_run.hpp"
+#include "host/motion/interp_plan.hpp"
+#include "sim/vboard/virtual_board.hpp"
 
 namespace mc::test {
 namespace {
@@ -25,7 +27,7 @@ using host::LinkError;
 // The virtual board served on a PTY from a thread, unpaced.
 class ServedBoard {
  public:
-  ServedBoard() : board_(sim::default_machine()) {
+  ServedBoard() : board_(machine::default_machine()) {
     sim::ServeOptions o;
     o.paced = false;
     thread_ = std::thread([this, o] { sim::serve(board_, pty_, o, stop_); });

@@ -8,8 +8,8 @@
 #include <sstream>
 #include <string>
 
-#include "board_regs.hpp"
-#include "board_regs_gen.hpp"
+#include "hls/board_regs.hpp"
+#include "host/link/board_regs_gen.hpp"
 
 namespace mc {
 namespace {

@@ -9,8 +9,8 @@
 #include <random>
 
 #include "board_harness.hpp"
-#include "interp_plan.hpp"
-#include "pid_core.hpp"
+#include "hls/pid_core.hpp"
+#include "host/motion/interp_plan.hpp"
 
 namespace mc::test {
 namespace {

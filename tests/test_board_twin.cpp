@@ -32,11 +32,11 @@
 
 #include "Vmotioncore_icebreaker.h"
 #include "Vmotioncore_icebreaker___024root.h"
+#include "hls/motioncore_icebreaker.hpp"
+#include "hls/pid_regs.hpp"
+#include "host/link/protocol.hpp"
 #include "interp_bench.hpp"
-#include "motioncore_icebreaker.hpp"
-#include "pid_regs.hpp"
-#include "protocol.hpp"
-#include "uart_model.hpp"
+#include "sim/vboard/uart_model.hpp"
 #include "vl_context.hpp"
 
 namespace mc::test {

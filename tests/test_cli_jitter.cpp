@@ -16,7 +16,7 @@
 #include <thread>
 
 #include "cli_run.hpp"
-#include "jitter.hpp"
+#include "sim/plant/jitter.hpp"
 
 namespace {
 

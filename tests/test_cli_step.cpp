@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "cli_run.hpp"
-#include "cosim.hpp"
-#include "step_metrics.hpp"
+#include "host/control/step_metrics.hpp"
+#include "sim/cosim/cosim.hpp"
 #include "vboard_server.hpp"
 
 namespace mc::test {
@@ -78,13 +78,13 @@ TEST(CliStep, CaptureAgreesWithTheTwinCosimulation) {
   // The same scenario in the co-simulation: default machine and gains, Ts
   // 100 us, a 1 mm step by the interpolator's set, the core's hls twin.
   mc::sim::RunSpec spec;
-  spec.machine = mc::sim::default_machine();
+  spec.machine = mc::machine::default_machine();
   spec.platform = mc::sim::find_platform(spec.machine, "fpga-100us");
   spec.scenario = mc::sim::find_scenario("step");
   spec.scenario.duration_s = 0.2;
   spec.engine = mc::sim::Engine::Twin;
   const mc::sim::RunResult tw = mc::sim::run_isolated(spec);
-  const double cpm = mc::sim::counts_per_m(spec.machine.axes[0]);
+  const double cpm = mc::machine::counts_per_m(spec.machine.axes[0]);
   std::vector<double> y;
   for (double p : tw.pos_m[0]) y.push_back(p * cpm);
   const mc::host::StepMetrics t = mc::host::step_metrics(tw.t, y, 0, 400, 0);

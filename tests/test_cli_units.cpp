@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "errors.hpp"
-#include "units.hpp"
+#include "host/base/errors.hpp"
+#include "host/base/units.hpp"
 
 using namespace mc::host;
 

@@ -6,14 +6,14 @@
 #include <cmath>
 #include <cstdio>
 
-#include "cosim.hpp"
+#include "sim/cosim/cosim.hpp"
 
 namespace mc::sim {
 namespace {
 
 RunSpec spec_for(const std::string& platform, const std::string& scenario, Engine e, bool quick = true) {
   RunSpec s;
-  s.machine = default_machine();
+  s.machine = machine::default_machine();
   s.platform = find_platform(s.machine, platform);
   s.scenario = find_scenario(scenario, quick);
   s.engine = e;
@@ -73,23 +73,23 @@ TEST(Cosim, StepResponseOfTheFpgaLoop) {
   print(r);
   EXPECT_TRUE(r.tracking);
   EXPECT_LT(r.step.overshoot_pct, 30);
-  EXPECT_LT(r.step.settling_time, 0.1);
+  EXPECT_LT(r.step.settling_s, 0.1);
   EXPECT_NEAR(r.pos_m[0].back(), 1e-3, 2.0 / counts_per_m(s.machine.axes[0]));
   s.platform = find_platform(s.machine, "fpga-10ms");
   s.policy = GainPolicy::Tuned;
   const RunResult slow = run_isolated(s);
   print(slow);
   EXPECT_TRUE(slow.tracking);
-  EXPECT_GT(slow.step.rise_time, 2 * r.step.rise_time);
+  EXPECT_GT(slow.step.rise_s, 2 * r.step.rise_s);
 }
 
 // The tuned rule: the bandwidth falls with the loop delay, never rises above
 // the machine's own design, and the gains place the poles it says.
 TEST(Cosim, TunedRule) {
-  const MachineConfig m = default_machine();
+  const MachineConfig m = machine::default_machine();
   const AxisConfig& x = m.axes[0];
   const double w0 = 3 * x.pid.ki / x.pid.kp;
-  const mc::host::PidGains fast = tuned_gains(m, x, 1e-5, 1e-6), slow = tuned_gains(m, x, 1e-2, 6e-3);
+  const mc::host::PidGains fast = tuned_gains(x, 1e-5, 1e-6), slow = tuned_gains(x, 1e-2, 6e-3);
   EXPECT_NEAR(3 * fast.ki / fast.kp, w0, 1e-9 * w0);
   EXPECT_NEAR(3 * slow.ki / slow.kp, 1 / (4 * 6e-3), 1e-9);
   // tau s^3 + (1 + Kg Kd) s^2 + Kg Kp s + Kg Ki = tau (s + w)^3 when Kd > 0.

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
-#include "errors.hpp"
-#include "host_loop.hpp"
-#include "pid_double.hpp"
+#include "host/base/errors.hpp"
+#include "host/control/pid_double.hpp"
+#include "sim/plant/host_loop.hpp"
 
 namespace mc::sim {
 namespace {

@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "Vinterp_core.h"
+#include "hls/interp_core.hpp"
 #include "interp_bench.hpp"
-#include "interp_core.hpp"
 #include "verilated.h"
 #include "vl_context.hpp"
 

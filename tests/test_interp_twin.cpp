@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "hls/interp_core.hpp"
 #include "interp_bench.hpp"
-#include "interp_core.hpp"
 
 namespace mc::test {
 namespace {

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "errors.hpp"
-#include "jitter.hpp"
-#include "jitter_record.hpp"
+#include "host/base/errors.hpp"
+#include "host/control/jitter_record.hpp"
+#include "sim/plant/jitter.hpp"
 
 namespace mc::sim {
 namespace {

@@ -1,12 +1,12 @@
-// Benchmark metrics against analytic cases.
+// Tracking metrics against analytic cases (step metrics: test_step_metrics.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "metrics.hpp"
+#include "host/control/metrics.hpp"
 
-namespace mc::sim {
+namespace mc::host {
 namespace {
 
 struct Trace {
@@ -22,68 +22,6 @@ Trace sample(F f, double t_end, double dt) {
     r.y.push_back(f(double(i) * dt));
   }
   return r;
-}
-
-TEST(Metrics, FirstOrderStep) {
-  const double tau = 0.05, s = 2e-3;  // 2 mm step
-  const Trace r = sample([&](double t) { return s * (1 - std::exp(-t / tau)); }, 1.0, 1e-5);
-  const StepMetrics m = step_metrics(r.t, r.y, s);
-  EXPECT_NEAR(m.rise_time, std::log(9.0) * tau, 1e-6);
-  EXPECT_NEAR(m.settling_time, std::log(50.0) * tau, 1e-6);
-  EXPECT_EQ(m.overshoot_pct, 0.0);
-  // Final 10 %: t in [0.9, 1], mean of s e^{-t/tau}.
-  const double sse = s * tau * (std::exp(-0.9 / tau) - std::exp(-1.0 / tau)) / 0.1;
-  EXPECT_NEAR(m.steady_state_error, sse, 1e-3 * sse + 1e-15);
-  EXPECT_NEAR(m.iae, s * tau * (1 - std::exp(-1.0 / tau)), 1e-9 * s);
-}
-
-TEST(Metrics, NegativeStepGivesTheSameTimes) {
-  const double tau = 0.05;
-  const Trace r = sample([&](double t) { return -(1 - std::exp(-t / tau)); }, 1.0, 1e-5);
-  const StepMetrics m = step_metrics(r.t, r.y, -1);
-  EXPECT_NEAR(m.rise_time, std::log(9.0) * tau, 1e-6);
-  EXPECT_NEAR(m.settling_time, std::log(50.0) * tau, 1e-6);
-}
-
-TEST(Metrics, SecondOrderUnderdampedStep) {
-  const double zeta = 0.3, wn = 40, wd = wn * std::sqrt(1 - zeta * zeta), sg = zeta * wn;
-  const double k = zeta / std::sqrt(1 - zeta * zeta);
-  const double t_end = 2.0;
-  const auto err = [&](double t) { return std::exp(-sg * t) * (std::cos(wd * t) + k * std::sin(wd * t)); };
-  const Trace r = sample([&](double t) { return 1 - err(t); }, t_end, 1e-5);
-  const StepMetrics m = step_metrics(r.t, r.y, 1);
-  EXPECT_NEAR(m.overshoot_pct, 100 * std::exp(-zeta * M_PI / std::sqrt(1 - zeta * zeta)), 1e-4);
-
-  // IAE: e(t) = e^{-sg t} cos(wd t - phi) / sqrt(1 - zeta^2), integrated
-  // exactly between its zeros (wd t - phi = pi/2 + n pi).
-  const double phi = std::atan(k), c = 1 / std::sqrt(1 - zeta * zeta);
-  const auto prim = [&](double t) {  // antiderivative of e^{-sg t} cos(wd t - phi)
-    const double th = wd * t - phi;
-    return std::exp(-sg * t) * (-sg * std::cos(th) + wd * std::sin(th)) / (sg * sg + wd * wd);
-  };
-  double iae = 0, a = 0;
-  for (int n = 0;; ++n) {
-    const double b = std::min(t_end, (M_PI / 2 + n * M_PI + phi) / wd);
-    iae += c * std::abs(prim(b) - prim(a));
-    if (b >= t_end) break;
-    a = b;
-  }
-  EXPECT_NEAR(m.iae, iae, 1e-8);
-  EXPECT_GT(m.iae, 1 / wn);  // sanity: bigger than the critically damped value 2 zeta / wn
-  // Settling: the last 2 % band exit lies on the envelope's approach, under
-  // its bound ln(50 c) / (zeta wn).
-  EXPECT_LT(m.settling_time, std::log(50 * c) / sg);
-  EXPECT_GT(m.settling_time, std::log(50 * c) / sg - M_PI / wd);
-  EXPECT_NEAR(std::abs(err(m.settling_time)), 0.02, 1e-6);
-}
-
-TEST(Metrics, NotSettledAndNeverReachedAreNaN) {
-  const Trace r = sample([](double t) { return 0.5 * t; }, 1.0, 1e-3);
-  const StepMetrics m = step_metrics(r.t, r.y, 1);
-  EXPECT_TRUE(std::isnan(m.settling_time));
-  EXPECT_TRUE(std::isnan(m.rise_time));
-  EXPECT_THROW(step_metrics({0}, {0}, 1), std::invalid_argument);
-  EXPECT_THROW(step_metrics({0, 1}, {0, 1}, 0), std::invalid_argument);
 }
 
 TEST(Metrics, FollowingErrorOfASinusoid) {
@@ -140,4 +78,4 @@ TEST(Metrics, ContourErrorFromCirclesAndArcs) {
 }
 
 }  // namespace
-}  // namespace mc::sim
+}  // namespace mc::host

@@ -15,11 +15,11 @@
 
 #include "Vmotion_core.h"
 #include "Vmotion_core2.h"
-#include "dc_motor.hpp"
+#include "hls/motion_core.hpp"
 #include "interp_bench.hpp"
-#include "motion_core.hpp"
+#include "sim/cosim/vl_motion.hpp"
+#include "sim/plant/dc_motor.hpp"
 #include "vl_context.hpp"
-#include "vl_motion.hpp"
 
 namespace mc::test {
 namespace {

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <random>
 
-#include "dc_motor.hpp"
-#include "motion_core.hpp"
+#include "hls/motion_core.hpp"
+#include "sim/plant/dc_motor.hpp"
 
 namespace mc::test {
 namespace {
@@ -94,7 +94,6 @@ TEST(MotionCoreTwin, SkipEqualsClocks) {
           fast.skip(rest);
           skipped += rest;
           clocks += rest;
-          c = k;
           expect_same(ref.outputs(), fast.outputs(), clocks);
           break;
         }

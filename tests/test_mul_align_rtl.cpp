@@ -9,7 +9,7 @@
 #include <random>
 
 #include "Vmul_align.h"
-#include "mc_fixed.hpp"
+#include "hls/mc_fixed.hpp"
 #include "verilated.h"
 #include "vl_context.hpp"
 

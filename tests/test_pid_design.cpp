@@ -10,11 +10,11 @@
 #include <random>
 #include <vector>
 
-#include "errors.hpp"
-#include "mc_fixed.hpp"
-#include "pid_core.hpp"
-#include "pid_design.hpp"
-#include "pid_regs.hpp"
+#include "hls/mc_fixed.hpp"
+#include "hls/pid_core.hpp"
+#include "hls/pid_regs.hpp"
+#include "host/base/errors.hpp"
+#include "host/control/pid_design.hpp"
 
 using namespace mc::host;
 using cplx = std::complex<double>;

@@ -13,10 +13,10 @@
 #include <random>
 #include <vector>
 
-#include "errors.hpp"
-#include "pid_core.hpp"
-#include "pid_design.hpp"
-#include "pid_double.hpp"
+#include "hls/pid_core.hpp"
+#include "host/base/errors.hpp"
+#include "host/control/pid_design.hpp"
+#include "host/control/pid_double.hpp"
 
 namespace mc::host {
 namespace {

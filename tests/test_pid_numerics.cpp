@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "pid_core.hpp"
-#include "pid_design.hpp"
+#include "hls/pid_core.hpp"
+#include "host/control/pid_design.hpp"
 
 namespace mc {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "pid_core.hpp"
+#include "hls/pid_core.hpp"
 
 namespace mc {
 namespace {

@@ -1,14 +1,14 @@
 // The link protocol codec (host/protocol.hpp): CRC check value, frames round
 // trip through the decoder, and every class of malformed input is rejected
 // and counted the way the board counts it.
-#include "protocol.hpp"
+#include "host/link/protocol.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 #include <string>
 
-#include "errors.hpp"
+#include "host/base/errors.hpp"
 
 namespace mc::host::proto {
 namespace {

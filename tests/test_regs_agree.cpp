@@ -7,9 +7,9 @@
 #include <regex>
 #include <string>
 
-#include "interp_seg.hpp"
-#include "mc_fixed.hpp"
-#include "pid_regs.hpp"
+#include "hls/interp_seg.hpp"
+#include "hls/mc_fixed.hpp"
+#include "hls/pid_regs.hpp"
 
 namespace mc {
 namespace {

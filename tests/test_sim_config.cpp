@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "errors.hpp"
-#include "machine_config.hpp"
+#include "host/base/errors.hpp"
+#include "host/machine/machine_config.hpp"
 
-namespace mc::sim {
+namespace mc::machine {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -251,4 +251,4 @@ TEST(SimConfig, LoadFromFile) {
 }
 
 }  // namespace
-}  // namespace mc::sim
+}  // namespace mc::machine

@@ -12,14 +12,17 @@
 #include <random>
 #include <vector>
 
-#include "dc_motor.hpp"
-#include "machine_config.hpp"
-#include "pid_design.hpp"
-#include "quad_decoder.hpp"
+#include "hls/quad_decoder.hpp"
+#include "host/control/pid_design.hpp"
+#include "host/machine/machine_config.hpp"
+#include "sim/plant/dc_motor.hpp"
 
 namespace mc::sim {
 namespace {
 
+using machine::axis;
+using machine::default_machine;
+using machine::PidConfig;
 using cplx = std::complex<double>;
 constexpr double kPi = 3.14159265358979323846;
 

@@ -1,7 +1,7 @@
 // host/step_metrics: against analytic first- and second-order step responses,
 // over random sample periods, with measurement noise, and on responses that
 // never rise or never settle.
-#include "step_metrics.hpp"
+#include "host/control/step_metrics.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <functional>
 #include <random>
 
-#include "errors.hpp"
+#include "host/base/errors.hpp"
 
 namespace mc::host {
 namespace {

@@ -1,7 +1,7 @@
 // host/tuning: relay analysis against the plant's frequency response,
 // identification of the simulated default axis, pole placement, and the
 // designed gains closing the loop on the true nonlinear plant.
-#include "tuning.hpp"
+#include "host/control/tuning.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,10 @@
 #include <cstdio>
 #include <random>
 
-#include "dc_motor.hpp"
-#include "errors.hpp"
-#include "machine_config.hpp"
-#include "pid_core.hpp"
+#include "hls/pid_core.hpp"
+#include "host/base/errors.hpp"
+#include "host/machine/machine_config.hpp"
+#include "sim/plant/dc_motor.hpp"
 
 namespace mc::host {
 namespace {
@@ -23,15 +23,15 @@ namespace {
 using cplx = std::complex<double>;
 constexpr double kPi = 3.14159265358979323846;
 
-sim::AxisConfig default_x() {
-  return sim::axis(sim::default_machine(), "x");
+machine::AxisConfig default_x() {
+  return machine::axis(machine::default_machine(), "x");
 }
 
 // The axis from drive units to counts, sampled with a ZOH at ts: the exact
 // discrete frequency response of what a relay or PID at ts sees (the plant's
 // own ZOH matrices at step ts). Drive units through the averaged PWM: a
 // multiple of 2^(15 - pwm_bits) maps to exactly u / 32768 * supply_v.
-cplx plant_z(const sim::AxisConfig& cfg, double ts, double w) {
+cplx plant_z(const machine::AxisConfig& cfg, double ts, double w) {
   sim::AxisPlant p(cfg, ts);
   const cplx z = std::polar(1.0, w * ts);
   const Eigen::Matrix3cd m = z * Eigen::Matrix3cd::Identity() - p.ad().cast<cplx>();
@@ -40,7 +40,7 @@ cplx plant_z(const sim::AxisConfig& cfg, double ts, double w) {
 }
 
 // The frequency in (0, pi/ts) where the sampled plant's phase is phase_deg.
-double phase_crossing(const sim::AxisConfig& cfg, double ts, double phase_deg) {
+double phase_crossing(const machine::AxisConfig& cfg, double ts, double phase_deg) {
   const double target = phase_deg * kPi / 180;
   // The phase falls monotonically from -90 deg; unwrap through -180.
   const auto phase = [&](double w) {
@@ -57,8 +57,8 @@ double phase_crossing(const sim::AxisConfig& cfg, double ts, double phase_deg) {
 
 // Relay control of the simulated axis at ts about a setpoint half a count
 // off the encoder's grid (so the error is never exactly 0).
-std::vector<double> relay_capture(const sim::AxisConfig& cfg, bool friction, double d, double eps, double ts,
-                                  double duration) {
+std::vector<double> relay_capture(const machine::AxisConfig& cfg, bool friction, double d, double eps,
+                                  double ts, double duration) {
   sim::AxisPlant p(cfg, 1e-6);
   p.set_friction(friction);
   Relay relay(d, eps);
@@ -81,7 +81,7 @@ std::vector<double> relay_capture(const sim::AxisConfig& cfg, bool friction, dou
 // the relay does find (its period, pi a / (4 d)) lies on the plant's
 // frequency response to 1 %. docs/tuning.md discusses it.
 TEST(TuningRelay, UltimateGainAndPeriodMatchThePlant) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const double d = 8192;
   for (const double ts : {1e-5, 1e-4}) {
     const double wu = phase_crossing(cfg, ts, -180);
@@ -109,7 +109,7 @@ TEST(TuningRelay, UltimateGainAndPeriodMatchThePlant) {
 // With hysteresis the relay finds the point where the plant's phase is
 // -180 + asin(eps/a) and its gain pi a / (4 d): compare at the measured Tu.
 TEST(TuningRelay, HysteresisMovesThePointAsTheDescribingFunctionSays) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const double ts = cfg.pid.ts_s, d = 8192;
   for (const double eps : {2.0, 8.0}) {
     const RelayResult r = relay_analyse(relay_capture(cfg, false, d, eps, ts, 0.4), ts, d, eps);
@@ -127,7 +127,7 @@ TEST(TuningRelay, HysteresisMovesThePointAsTheDescribingFunctionSays) {
 // below the centre before it counts a period, and the amplitude is a
 // least-squares fit, so both barely move.
 TEST(TuningRelay, NoiseBarelyMovesTheEstimate) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const double ts = cfg.pid.ts_s, d = TuneDefaults::relay_amplitude;
   const std::vector<double> y = relay_capture(cfg, true, d, 0, ts, TuneDefaults::relay_duration_s);
   const RelayResult clean = relay_analyse(y, ts, d, 0);
@@ -225,8 +225,8 @@ TEST(TuningExcitation, MultisineHasPowerOnlyAtItsTones) {
 struct TrueModel {
   double k, tau;
 };
-TrueModel true_model(const sim::AxisConfig& cfg) {
-  const sim::MotorParams& m = cfg.motor;
+TrueModel true_model(const machine::AxisConfig& cfg) {
+  const machine::MotorParams& m = cfg.motor;
   const sim::AxisPlant p(cfg);
   const double den = m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad;
   return {m.kt_nm_per_a / den * cfg.drive.supply_v / 32768 * double(cfg.encoder_cpr) / (2 * kPi),
@@ -239,7 +239,7 @@ TrueModel true_model(const sim::AxisConfig& cfg) {
 struct Capture {
   std::vector<double> u, y;
 };
-Capture excite(const sim::AxisConfig& cfg, const std::vector<double>& u, bool friction, bool quantized) {
+Capture excite(const machine::AxisConfig& cfg, const std::vector<double>& u, bool friction, bool quantized) {
   sim::AxisPlant p(cfg, 1e-6);
   p.set_friction(friction);
   const int per_sample = int(std::lround(cfg.pid.ts_s / p.dt_s()));
@@ -276,7 +276,7 @@ TEST(TuningIdentify, ExactOnTheDiscreteModel) {
 }
 
 TEST(TuningIdentify, RejectsCapturesThatDoNotFit) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const std::vector<double> u = prbs(4096, 10e-3, 0.5, cfg.pid.ts_s);
   Capture c = excite(cfg, u, true, true);
   EXPECT_THROW(identify(c.u, std::vector<double>(c.y.begin(), c.y.end() - 1), cfg.pid.ts_s), InputError);
@@ -293,7 +293,7 @@ TEST(TuningIdentify, RejectsCapturesThatDoNotFit) {
 }
 
 TEST(TuningIdentify, RecoversTheDefaultAxis) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const TrueModel tm = true_model(cfg);
   // The excitation docs/tuning.md recommends: balanced PRBS, 4096 drive
   // units (6 V), 10 ms bits (longer than tau), 1 s.
@@ -310,7 +310,7 @@ TEST(TuningIdentify, RecoversTheDefaultAxis) {
           "Coulomb %.1f du, fit rms %.3f counts, fast %.3f ms, travel %.2f mm\n",
           friction ? "on" : "off", quantized ? "quantized" : "exact", m.k, tm.k, 100 * (m.k / tm.k - 1),
           1e3 * m.tau, 1e3 * tm.tau, 100 * (m.tau / tm.tau - 1), m.coulomb, m.fit_rms, 1e3 * m.tau_fast,
-          1e3 * excursion / sim::counts_per_m(cfg));
+          1e3 * excursion / machine::counts_per_m(cfg));
       EXPECT_NEAR(m.k, tm.k, 0.02 * tm.k);
       EXPECT_NEAR(m.tau, tm.tau, 0.03 * tm.tau);
       EXPECT_LT(m.fit_rms, 0.5);
@@ -358,7 +358,7 @@ TEST(TuningDesign, PolePlacementPutsThePolesWhereAsked) {
 // The true plant (friction, stiction, electrical pole, averaged PWM, encoder)
 // in closed loop with the quantized controller the core runs (the hls twin):
 // a step of `step` counts from rest at t = 0.
-StepMetrics truth_step(const sim::AxisConfig& cfg, const PidGains& g, double step, double duration) {
+StepMetrics truth_step(const machine::AxisConfig& cfg, const PidGains& g, double step, double duration) {
   sim::AxisPlant p(cfg, 1e-6);
   const mc::PidParams par = core_params(design(g), CoreLimits{32767, 0, 0, 0});
   mc::PidState st;
@@ -375,7 +375,7 @@ StepMetrics truth_step(const sim::AxisConfig& cfg, const PidGains& g, double ste
   return step_metrics(t, y, 0, target, 0);
 }
 
-PidGains config_gains(const sim::AxisConfig& cfg) {
+PidGains config_gains(const machine::AxisConfig& cfg) {
   PidGains g{};
   g.kp = cfg.pid.kp;
   g.ki = cfg.pid.ki;
@@ -390,7 +390,7 @@ PidGains config_gains(const sim::AxisConfig& cfg) {
 // loop on the true plant with the quantized controller. The 1 mm step
 // (400 counts) is the one docs/plant.md measures the default gains with.
 TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const Capture c = excite(cfg,
                            prbs(TuneDefaults::prbs_amplitude, TuneDefaults::prbs_bit_s,
                                 TuneDefaults::prbs_duration_s, cfg.pid.ts_s),
@@ -436,7 +436,7 @@ TEST(TuningDesign, ModelMethodBeatsTheDefaultGains) {
 // The relay method end to end on the true plant: the rules give stable loops;
 // the printed metrics are what docs/tuning.md compares.
 TEST(TuningDesign, RelayRulesCloseAStableLoop) {
-  const sim::AxisConfig cfg = default_x();
+  const machine::AxisConfig cfg = default_x();
   const double ts = cfg.pid.ts_s, d = 8192;
   const RelayResult r = relay_analyse(relay_capture(cfg, true, d, 0, ts, 0.3), ts, d, 0);
   const struct {

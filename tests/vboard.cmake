@@ -3,7 +3,7 @@
 # runs them.
 
 mc_gtest(test_board_link system test_board_link.cpp)
-target_link_libraries(test_board_link PRIVATE mc_host mc_vboard)
+target_link_libraries(test_board_link PRIVATE mc_motion mc_vboard)
 
 mc_gtest(test_cli_board system test_cli_board.cpp)
 target_link_libraries(test_cli_board PRIVATE nlohmann_json::nlohmann_json)
@@ -11,6 +11,6 @@ target_compile_definitions(test_cli_board PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:
 add_dependencies(test_cli_board motionctl)
 
 mc_gtest(test_cli_step system test_cli_step.cpp)
-target_link_libraries(test_cli_step PRIVATE mc_host mc_sim nlohmann_json::nlohmann_json)
+target_link_libraries(test_cli_step PRIVATE mc_cosim nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_step PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_cli_step motionctl)

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <memory>
 
+#include "sim/cosim/vl_ports.hpp"  // sim/vl_ports.hpp: put32, get_bits
 #include "verilated.h"
-#include "vl_ports.hpp"  // sim/vl_ports.hpp: put32, get_bits
 
 namespace mc::test {
 

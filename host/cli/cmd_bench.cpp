@@ -1,0 +1,234 @@
+// motionctl bench: the sample-period benchmark (sim/bench.hpp). Every
+// platform (the 10 ms PC loop, the FPGA loop at 10 ms down to its shortest
+// Ts) on every scenario under both gain policies, co-simulated; writes
+// report.md, results.csv and plots, and prints the report.
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "host/base/errors.hpp"
+#include "host/cli/commands.hpp"
+#include "sim/cosim/bench.hpp"
+
+namespace mc::host::cli {
+namespace {
+
+struct BenchCli {
+  std::string out = "build/bench", config, jitter, engine = "rtl", policy = "both";
+  bool quick = false, json = false, no_plots = false;
+  int jobs = 0;
+  uint64_t seed = 1;
+  std::vector<std::string> platforms, scenarios;
+};
+
+// A progress bar on a terminal; otherwise one line per finished run.
+class Progress {
+ public:
+  Progress() : tty_(::isatty(2)) {}
+  void operator()(int done, int total, const std::string& last, double running) {
+    if (!tty_) {
+      if (done != shown_) std::fprintf(stderr, "bench: %d/%d done (%s)\n", done, total, last.c_str());
+      shown_ = done;
+      return;
+    }
+    const double f = total ? (done + running) / total : 1;
+    const int width = 40, fill = int(std::lround(f * width));
+    std::fprintf(stderr, "\r[%s%s] %3d%%  %d/%d runs  %-32s", std::string(size_t(fill), '#').c_str(),
+                 std::string(size_t(width - fill), ' ').c_str(), int(f * 100), done, total, last.c_str());
+    if (done == total) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool tty_;
+  int shown_ = -1;
+};
+
+mc::sim::Engine parse_engine(const std::string& e) {
+  if (e != "rtl" && e != "twin") throw InputError("--engine", "'" + e + "'", "rtl or twin");
+  return e == "rtl" ? mc::sim::Engine::Rtl : mc::sim::Engine::Twin;
+}
+
+// "same" or "tuned"; `both` also allows "both" (nullopt).
+std::optional<mc::sim::GainPolicy> parse_policy(const std::string& p, bool both) {
+  if (p == "same") return mc::sim::GainPolicy::Same;
+  if (p == "tuned") return mc::sim::GainPolicy::Tuned;
+  if (both && p == "both") return std::nullopt;
+  throw InputError("--policy", "'" + p + "'", both ? "same, tuned or both" : "same or tuned");
+}
+
+void bench_command(const BenchCli& c) {
+  mc::sim::BenchOptions o;
+  o.machine = mc::machine::machine_or_default(c.config);
+  o.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
+  o.out_dir = c.out;
+  o.quick = c.quick;
+  o.engine = parse_engine(c.engine);
+  if (const auto p = parse_policy(c.policy, true)) o.policies = {*p};
+  if (c.jobs < 0) throw InputError("--jobs", std::to_string(c.jobs), "a positive number of processes");
+  o.jobs = c.jobs ? c.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
+  o.seed = c.seed;
+  o.platforms = c.platforms;
+  o.scenarios = c.scenarios;
+  o.plots = !c.no_plots;
+  Progress progress;
+  const mc::sim::BenchResult r = mc::sim::run_bench(o, std::ref(progress));
+  const std::vector<std::string> files = mc::sim::write_bench(o, r);
+  if (c.json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const mc::sim::RunResult& x : r.runs)
+      j.push_back({{"platform", x.platform},
+                   {"scenario", x.scenario},
+                   {"policy", x.policy},
+                   {"engine", x.engine},
+                   {"ts_s", x.gains.ts},
+                   {"follow_rms_x_um", x.follow[0].rms * 1e6},
+                   {"follow_rms_y_um", x.follow[1].rms * 1e6},
+                   {"contour_rms_um", x.contour.rms * 1e6},
+                   {"tracking", x.tracking},
+                   {"sim_speed", x.sim_s / x.wall_s}});
+    std::cout << nlohmann::json{{"runs", j}, {"files", files}}.dump(2) << "\n";
+    return;
+  }
+  std::ifstream md(c.out + "/report.md");
+  std::cout << md.rdbuf();
+  std::cout << "\nWrote:";
+  for (const std::string& f : files) std::cout << "\n  " << f;
+  std::cout << "\n";
+}
+
+struct CosimCli {
+  std::string config, jitter, engine = "rtl", policy = "same", platform = "fpga-100us", scenario = "step",
+                              trace, csv;
+  bool quick = false, json = false;
+  uint64_t seed = 1;
+};
+
+void cosim_command(const CosimCli& c) {
+  mc::sim::RunSpec s;
+  s.machine = mc::machine::machine_or_default(c.config);
+  s.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
+  s.platform = mc::sim::find_platform(s.machine, c.platform);
+  s.scenario = mc::sim::find_scenario(c.scenario, c.quick);
+  s.engine = parse_engine(c.engine);
+  s.policy = *parse_policy(c.policy, false);
+  if (!c.trace.empty() && (s.platform.host || s.engine != mc::sim::Engine::Rtl))
+    throw InputError("--trace", "'" + c.trace + "'",
+                     "an FPGA platform with --engine rtl (the waveform is the RTL's)");
+  s.fst_path = c.trace;
+  s.seed = c.seed;
+  s.record_dt_s = 1e-5;
+  const mc::sim::RunResult r = mc::sim::run_isolated(s);
+  if (!c.csv.empty()) {
+    std::ofstream f(c.csv);
+    f << "t_s,cmd_x_m,cmd_y_m,pos_x_m,pos_y_m\n";
+    for (size_t i = 0; i < r.t.size(); ++i)
+      f << r.t[i] << ',' << r.cmd_m[0][i] << ',' << r.cmd_m[1][i] << ',' << r.pos_m[0][i] << ','
+        << r.pos_m[1][i] << '\n';
+    if (!f) throw InputError("--csv", "'" + c.csv + "'", "a writable file path");
+  }
+  const bool step = r.scenario == "step";
+  if (c.json) {
+    nlohmann::json j{{"platform", r.platform},
+                     {"scenario", r.scenario},
+                     {"policy", r.policy},
+                     {"engine", r.engine},
+                     {"ts_s", r.gains.ts},
+                     {"kp", r.gains.kp},
+                     {"ki", r.gains.ki},
+                     {"kd", r.gains.kd},
+                     {"tf_s", r.gains.tf},
+                     {"follow_rms_x_um", r.follow[0].rms * 1e6},
+                     {"follow_max_x_um", r.follow[0].max * 1e6},
+                     {"follow_rms_y_um", r.follow[1].rms * 1e6},
+                     {"follow_max_y_um", r.follow[1].max * 1e6},
+                     {"tracking", r.tracking},
+                     {"samples", r.sample_u[0].size()},
+                     {"sim_s", r.sim_s},
+                     {"wall_s", r.wall_s}};
+    if (step) {
+      j["settling_time_s"] = r.step.settling_s;
+      j["overshoot_pct"] = r.step.overshoot_pct;
+      j["rise_time_s"] = r.step.rise_s;
+    } else {
+      j["contour_rms_um"] = r.contour.rms * 1e6;
+      j["contour_max_um"] = r.contour.max * 1e6;
+    }
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("%s on %s, %s gains, %s engine: Ts %.6g s, kp %.6g ki %.6g kd %.6g tf %.6g\n",
+              r.scenario.c_str(), r.platform.c_str(), r.policy.c_str(), r.engine.c_str(), r.gains.ts,
+              r.gains.kp, r.gains.ki, r.gains.kd, r.gains.tf);
+  std::printf("following error x: RMS %.3f um, max %.3f um; y: RMS %.3f um, max %.3f um\n",
+              r.follow[0].rms * 1e6, r.follow[0].max * 1e6, r.follow[1].rms * 1e6, r.follow[1].max * 1e6);
+  if (step)
+    std::printf(
+        "step: rise %.3f ms, overshoot %.2f %%, settling (2 %%) %.3f ms, steady-state error %.3f um\n",
+        r.step.rise_s * 1e3, r.step.overshoot_pct, r.step.settling_s * 1e3, r.step.ss_error * 1e6);
+  else
+    std::printf("contour error: RMS %.3f um, max %.3f um\n", r.contour.rms * 1e6, r.contour.max * 1e6);
+  std::printf("%s; %zu controller samples; %.3f s simulated in %.3f s (%.3gx real time)\n",
+              r.tracking ? "tracking at the end" : "NOT TRACKING at the end", r.sample_u[0].size(), r.sim_s,
+              r.wall_s, r.sim_s / r.wall_s);
+  if (!c.trace.empty()) std::printf("waveform: %s\n", c.trace.c_str());
+}
+
+}  // namespace
+
+void add_cosim_command(CLI::App& app) {
+  auto c = std::make_shared<CosimCli>();
+  CLI::App* cmd = app.add_subcommand("cosim", "One closed-loop co-simulation: a platform on a scenario");
+  cmd->add_option("--platform", c->platform,
+                  "host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us or fpga-min")
+      ->capture_default_str();
+  cmd->add_option("--scenario", c->scenario, "step, line-45, line-30 or circle")->capture_default_str();
+  cmd->add_option("--policy", c->policy, "Gain policy: same or tuned")->capture_default_str();
+  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
+      ->capture_default_str();
+  cmd->add_flag("--quick", c->quick, "The shortened scenario of `bench --quick`");
+  cmd->add_option("--seed", c->seed, "Seed of the host loop's jitter draws")->capture_default_str();
+  cmd->add_option("--trace", c->trace, "Write the core's waveform (FST, for GTKWave); RTL engine only");
+  cmd->add_option("--csv", c->csv, "Write the trace (t, command, position; metres) to this CSV file");
+  cmd->add_option("--config", c->config, "Machine TOML (default: the built-in configs/default.toml)");
+  cmd->add_option("--jitter", c->jitter,
+                  "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
+  cmd->add_flag("--json", c->json, "Machine-readable output");
+  cmd->callback([c] { cosim_command(*c); });
+}
+
+void add_bench_command(CLI::App& app) {
+  auto c = std::make_shared<BenchCli>();
+  CLI::App* cmd = app.add_subcommand(
+      "bench",
+      "Sample-period benchmark: the 10 ms PC loop against the FPGA loop at 10 ms .. its shortest Ts");
+  cmd->add_option("--out", c->out, "Output directory (report.md, results.csv, plots/, data/)")
+      ->capture_default_str();
+  cmd->add_flag("--quick", c->quick, "Short scenarios: a smoke run, not for comparison");
+  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
+      ->capture_default_str();
+  cmd->add_option("--policy", c->policy, "Gain policy: same, tuned or both")->capture_default_str();
+  cmd->add_option("--platform", c->platforms,
+                  "Only these platforms (host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us, fpga-min)");
+  cmd->add_option("--scenario", c->scenarios, "Only these scenarios (step, line-45, line-30, circle)");
+  cmd->add_option("--jobs", c->jobs, "Runs at once (default: the number of CPUs)");
+  cmd->add_option("--seed", c->seed, "Seed of the host loop's jitter draws")->capture_default_str();
+  cmd->add_option("--config", c->config, "Machine TOML (default: the built-in configs/default.toml)");
+  cmd->add_option("--jitter", c->jitter,
+                  "Wake-up histogram from `motionctl jitter` (default: the shipped one)");
+  cmd->add_flag("--no-plots", c->no_plots, "Skip the PNG plots (gnuplot)");
+  cmd->add_flag("--json", c->json, "Print the results as JSON instead of the report");
+  cmd->callback([c] { bench_command(*c); });
+}
+
+}  // namespace mc::host::cli

@@ -1,0 +1,135 @@
+// motionctl sim serve | stop: the virtual board (sim/virtual_board.hpp) on a
+// pseudo-terminal, in the foreground, and stopping the registered one.
+#include <signal.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "host/base/errors.hpp"
+#include "host/base/units.hpp"
+#include "host/cli/board_cli.hpp"
+#include "host/cli/commands.hpp"
+#include "sim/vboard/virtual_board.hpp"
+
+namespace mc::host::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
+
+extern "C" void on_stop_signal(int) {
+  g_stop.store(true);
+}
+
+struct ServeOptions {
+  bool fast = false;
+  std::string idle_exit = "0";
+  std::string status_every = "5";
+  bool no_register = false;
+  std::string config;  // overrides the global --config
+};
+
+void install_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  signal(SIGHUP, SIG_IGN);
+  signal(SIGPIPE, SIG_IGN);
+}
+
+void serve(const ServeOptions& o) {
+  const double idle_min = parse_number(o.idle_exit, "--idle-exit");
+  const double every = parse_duration(o.status_every, "--status-every");
+  if (idle_min < 0) throw InputError("--idle-exit", o.idle_exit, "minutes >= 0 (0: never)");
+  if (!o.config.empty()) global_options().config = o.config;
+  const mc::machine::MachineConfig m = machine();
+  mc::sim::VirtualBoard board(m);
+  mc::sim::Pty pty;
+  SimServer me{pty.path(), long(::getpid()), m.source == "built-in default" ? "" : global_options().config};
+  if (!me.config.empty() && me.config[0] != '/') {
+    char cwd[4096];
+    if (::getcwd(cwd, sizeof cwd)) me.config = std::string(cwd) + "/" + me.config;
+  }
+  install_handlers();
+  const bool registered = !o.no_register && register_sim_server(me);
+  // The one line tools read: the PTY path.
+  std::cout << pty.path() << std::endl;
+  std::cerr << "motionctl sim: virtual board (" << m.source << ", " << board.configured_axes()
+            << " plant axes) on " << pty.path() << (o.fast ? ", unpaced" : ", paced to the wall clock")
+            << (registered ? ", registered for --sim" : "") << "; Ctrl-C stops it" << std::endl;
+
+  mc::sim::ServeOptions so;
+  so.paced = !o.fast;
+  so.idle_exit_s = idle_min * 60;
+  so.status_every_s = every;
+  so.status = [](const mc::sim::ServeStatus& s) {
+    char line[256];
+    if (s.dormant) {
+      std::snprintf(line, sizeof line,
+                    "motionctl sim: board %.3f s: link quiet, drives off, axes at rest: clock stopped until "
+                    "the host sends",
+                    s.board_s);
+    } else {
+      std::snprintf(line, sizeof line,
+                    "motionctl sim: board %.3f s, wall %.1f s, real-time factor %.3f%s, host bytes in %llu "
+                    "out %llu dropped %llu",
+                    s.board_s, s.wall_s, s.rt_factor, s.model_bound ? " (model-bound: running flat out)" : "",
+                    static_cast<unsigned long long>(s.bytes_in), static_cast<unsigned long long>(s.bytes_out),
+                    static_cast<unsigned long long>(s.bytes_dropped));
+    }
+    std::cerr << line << std::endl;
+  };
+  const mc::sim::ServeStatus end = mc::sim::serve(board, pty, so, g_stop);
+  if (registered) unregister_sim_server(me);
+  std::cerr << "motionctl sim: stopped at board time " << end.board_s << " s"
+            << (g_stop.load() ? "" : " (idle limit)") << std::endl;
+}
+
+void stop() {
+  const auto s = find_sim_server();
+  if (!s) {
+    std::cout << "no virtual board registered in " << sim_state_dir() << '\n';
+    return;
+  }
+  ::kill(pid_t(s->pid), SIGTERM);
+  for (int i = 0; i < 200 && ::kill(pid_t(s->pid), 0) == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  std::cout << "stopped the virtual board (pid " << s->pid << ", " << s->pty << ")\n";
+}
+
+}  // namespace
+
+void add_sim_command(CLI::App& app) {
+  CLI::App* sim = app.add_subcommand("sim", "The virtual board: serve it on a pseudo-terminal, or stop it");
+  sim->require_subcommand(1);
+  auto o = std::make_shared<ServeOptions>();
+  CLI::App* srv = sim->add_subcommand(
+      "serve", "Run the virtual board in the foreground; prints its pseudo-terminal's path on stdout");
+  srv->footer(
+      "The Verilated board top (3 axes, handwheel) at the machine's clock, a DC-motor plant per axis of\n"
+      "the machine config (--config before the command, or the built-in one) on its encoder and H-bridge\n"
+      "pins, and its UART bit by bit on a pseudo-terminal: 'motionctl --port PTY status' talks to it.\n"
+      "Paced to the wall clock (never ahead of it; slower when the model is slower); the board's watchdog\n"
+      "runs on board time. Status lines go to stderr. SIGINT or SIGTERM stops it.");
+  srv->add_option("--config", o->config, "Machine TOML (the same as the global --config)")->type_name("FILE");
+  srv->add_flag("--fast", o->fast, "Do not pace: run as fast as the model goes");
+  srv->add_option("--idle-exit", o->idle_exit, "Exit after this many minutes without host bytes (0: never)")
+      ->type_name("MIN");
+  srv->add_option("--status-every", o->status_every, "Interval of the status lines (default 5s)")
+      ->type_name("TIME");
+  srv->add_flag("--no-register", o->no_register,
+                "Do not register for --sim (by default the first live server is the one --sim uses)");
+  srv->callback([o] { serve(*o); });
+  CLI::App* st = sim->add_subcommand("stop", "Stop the virtual board that --sim uses");
+  st->callback([] { stop(); });
+}
+
+}  // namespace mc::host::cli

@@ -1,0 +1,108 @@
+#include "host/link/board_capture.hpp"
+
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "host/base/errors.hpp"
+#include "host/link/protocol.hpp"
+
+namespace mc::host {
+
+namespace br = board::reg;
+namespace bb = board::bits;
+
+namespace {
+std::atomic<bool> g_interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
+extern "C" void on_interrupt(int) {
+  g_interrupted.store(true);
+}
+}  // namespace
+
+void catch_interrupts() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+uint32_t telemetry_decimation(double ts_s, double baud, int replies) {
+  if (!(ts_s > 0) || !(baud > 0)) throw InputError("sample period / baud", "not above 0", "positive values");
+  const double busy_s = 10.0 * (telemetry_frame_bytes(1) + replies * kReplyBytes) / baud;
+  return uint32_t(std::max(1.0, std::ceil(busy_s / ts_s - 1e-9)));
+}
+
+TelemetryStream::TelemetryStream(BoardLink& l, int axis, uint32_t decim, int64_t ping_every)
+    : l_(l), axis_(axis), decim_(decim), ping_every_(std::max<int64_t>(1, ping_every)) {
+  l_.write(br::TLM, 0);
+  l_.telemetry().clear();
+  l_.write(br::TLM, decim << bb::T_DECIM_LSB | (1u << axis) << bb::T_AXES_LSB);
+}
+
+TelemetryStream::~TelemetryStream() {
+  try {
+    l_.write(br::TLM, 0);
+    l_.telemetry().clear();
+  } catch (...) {  // the link is gone: the watchdog turns the drives off anyway
+  }
+}
+
+size_t TelemetryStream::next(std::vector<TlmSample>& out) {
+  using Clock = std::chrono::steady_clock;
+  auto quiet_since = Clock::now();
+  const unsigned mask = 1u << axis_;
+  size_t added = 0;
+  while (added == 0) {
+    if (g_interrupted.load())
+      throw Interrupted(
+          "interrupted; the command's temporary settings (telemetry, experiment gains, drive override) are "
+          "undone");
+    l_.poll(std::chrono::milliseconds(20));
+    auto& q = l_.telemetry();
+    while (!q.empty()) {
+      const proto::Frame f = std::move(q.front());
+      q.pop_front();
+      proto::Telemetry t;
+      try {
+        t = proto::parse_telemetry(f, mask);
+      } catch (const InputError&) {
+        continue;  // a frame of an earlier TLM setting
+      }
+      TlmSample s;
+      if (!have_) {
+        s.n = t.sample;
+        last_ping_ = s.n;
+        have_ = true;
+      } else {
+        const int64_t d = int64_t(uint16_t(t.sample - uint16_t(last_)));
+        s.n = last_ + d;
+        if (d != int64_t(decim_)) {
+          ++gaps_;
+          missing_ += std::max<int64_t>(0, d / int64_t(decim_) - 1);
+        }
+      }
+      last_ = s.n;
+      const proto::AxisSample& a = t.axes.at(0);
+      s.pos = a.pos;
+      s.cmd = a.cmd;
+      s.err = a.err;
+      s.u = a.u;
+      s.fault = t.fault;
+      out.push_back(s);
+      ++added;
+    }
+    const auto now = Clock::now();
+    if (added) quiet_since = now;
+    if ((have_ && last_ - last_ping_ >= ping_every_) || now - quiet_since > std::chrono::milliseconds(100)) {
+      l_.transact(proto::ping(0));  // throws when the board no longer answers
+      last_ping_ = last_;
+      quiet_since = now;
+    }
+  }
+  return added;
+}
+
+}  // namespace mc::host

@@ -1,0 +1,75 @@
+// Telemetry captures for motionctl step, tune and hostloop: choosing the
+// decimation the link can carry, streaming one axis' samples with the PID
+// sample counter unwrapped, reporting gaps (never filling them in), and
+// keeping the board's watchdog fed while the capture runs.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "host/link/board_link.hpp"
+
+namespace mc::host {
+
+// Bytes on the line: a telemetry frame with `axes` axes, and a reply.
+constexpr int kReplyBytes = 6 + 5;
+constexpr int telemetry_frame_bytes(int axes) {
+  return 6 + 4 * (1 + 4 * axes);
+}
+
+// The smallest decimation N such that a one-axis frame plus `replies`
+// replies queued in front of it (10 bits a byte at `baud`) fit in N sample
+// periods, so no sample is skipped (docs/protocol.md, Telemetry).
+uint32_t telemetry_decimation(double ts_s, double baud, int replies);
+
+// SIGINT and SIGTERM while a command has the board in a temporary state:
+// catch_interrupts() installs handlers that only set a flag, and
+// TelemetryStream::next() then throws Interrupted, so that the command puts
+// the board back (gains, Ts, the DRV override, telemetry off) before it exits.
+class Interrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+void catch_interrupts();
+
+// One sample of one axis, as the telemetry frame carries it.
+struct TlmSample {
+  int64_t n = 0;  // PID sample count, unwrapped (the first frame's count mod 2^16 onward)
+  int32_t pos = 0, cmd = 0, err = 0;
+  int16_t u = 0;
+  uint16_t fault = 0;
+};
+
+// Streams telemetry for one axis every `decim` samples from construction
+// until destruction (TLM = 0 then). next() waits for the next frames and
+// appends them; it sends a PING every `ping_every` samples of board time, and
+// whenever nothing arrived for 100 ms of wall time, so the watchdog stays fed
+// and a board that stopped answering is an error.
+class TelemetryStream {
+ public:
+  TelemetryStream(BoardLink& l, int axis, uint32_t decim, int64_t ping_every);
+  ~TelemetryStream();
+  TelemetryStream(const TelemetryStream&) = delete;
+  TelemetryStream& operator=(const TelemetryStream&) = delete;
+
+  // Appends at least one sample; returns how many.
+  size_t next(std::vector<TlmSample>& out);
+  // Frames whose sample count jumped by more than decim, and the samples
+  // (at the decimation) that were skipped in those jumps.
+  int64_t gaps() const { return gaps_; }
+  int64_t missing() const { return missing_; }
+  uint32_t decim() const { return decim_; }
+
+ private:
+  BoardLink& l_;
+  int axis_;
+  uint32_t decim_;
+  int64_t ping_every_;
+  bool have_ = false;
+  int64_t last_ = 0, last_ping_ = 0;
+  int64_t gaps_ = 0, missing_ = 0;
+};
+
+}  // namespace mc::host

@@ -1,0 +1,73 @@
+// The board's live state as the link reads it, its fault names, arming the
+// drives, and loading the interpolator's position: the register sequences
+// every board command shares.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "host/link/board_link.hpp"
+
+namespace mc::host {
+
+// Where a board operation says what it did on the way ("clearing the
+// watchdog fault ..."); may be empty.
+using Note = std::function<void(const std::string&)>;
+
+struct AxisState {
+  int32_t pos = 0, cmd = 0, err = 0;
+  int16_t u = 0;
+  bool sat = false, pid_en = false, drv_en = false;
+};
+
+struct BoardState {
+  uint32_t id = 0, clk_hz = 0, ts_cycles = 0, wdog = 0;
+  int naxes = 0;
+  uint32_t status = 0, fault = 0, ip_stat = 0, ip_segs = 0;
+  uint32_t link_crc = 0, link_cmd = 0, link_junk = 0;
+  std::vector<AxisState> axes;
+  bool armed() const;
+  double ts_s() const { return double(ts_cycles) / clk_hz; }
+};
+BoardState read_state(BoardLink& l);
+
+// The number of axes the board was built with (INFO's NAXES field).
+int read_naxes(BoardLink& l);
+
+// "watchdog, limit x": the FAULT bits by name ("none" for 0).
+std::string fault_names(uint32_t fault);
+
+// The sample period register, cycles (the core clamps it to its latency).
+uint32_t read_ts_cycles(BoardLink& l);
+
+// Loads the interpolator's position registers of the listed (axis, counts)
+// pairs and applies them with one IP_CTRL.set strobe: the commands jump
+// there at the next sample. Axes not listed keep the value last loaded, so
+// callers that must not move them list them with their current command.
+void set_position(BoardLink& l, const std::vector<std::pair<int, int32_t>>& axes);
+
+// Arms the drives. A watchdog fault alone (left by the previous command's
+// exit, by design) is cleared first, with a note through `note`; any other
+// latched fault is an error naming it. When the drives were off, the
+// interpolator is aborted and set to the encoder positions first, so the
+// command starts where the axes are. Returns the interpolator position.
+std::array<int64_t, 3> arm(BoardLink& l, const Note& note);
+
+// InputError unless axis a has gains (Kp or Ki nonzero), naming the commands
+// that set them.
+void require_gains(BoardLink& l, int a);
+// InputError unless axis a's PID is enabled.
+void require_enabled(BoardLink& l, int a);
+// Checks every axis has gains, arms the drives, then enables the axes' PIDs.
+void enable_axes(BoardLink& l, const std::vector<int>& axes, const Note& note);
+// Disables the axes' PIDs; with drives_off, first turns the drives off.
+void disable_axes(BoardLink& l, const std::vector<int>& axes, bool drives_off);
+// Clears the latched faults; returns what was latched (0: none). BoardError
+// when a fault's cause is still present.
+uint32_t clear_faults(BoardLink& l);
+
+}  // namespace mc::host

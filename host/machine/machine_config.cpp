@@ -1,0 +1,349 @@
+#include "host/machine/machine_config.hpp"
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "host/base/errors.hpp"
+#include "host/control/pid_design.hpp"
+
+namespace mc::machine {
+namespace {
+
+using mc::host::format_number;
+using mc::host::InputError;
+using mc::host::quote;
+
+constexpr double kPi = 3.14159265358979323846;
+
+enum class Range { positive, non_negative, any };
+
+std::string describe(Range r, std::string_view unit) {
+  std::string s = r == Range::positive       ? "a number > 0"
+                  : r == Range::non_negative ? "a number >= 0"
+                                             : "a number";
+  if (!unit.empty()) s += " (" + std::string(unit) + ")";
+  return s;
+}
+
+// The text of a value as the user wrote it, for messages.
+std::string as_written(const toml::node& n) {
+  if (const auto* s = n.as_string()) return quote(s->get());
+  if (const auto* i = n.as_integer()) return std::to_string(i->get());
+  if (const auto* f = n.as_floating_point()) return format_number(f->get());
+  if (const auto* b = n.as_boolean()) return b->get() ? "true" : "false";
+  if (n.is_table()) return "a table";
+  if (n.is_array()) return "an array";
+  return "a date/time";
+}
+
+// One TOML table being read: hands out typed values with their ranges
+// checked, remembers which keys were read, and in finish() rejects the rest,
+// so that a misspelt key is an error instead of a silently unused line.
+class Reader {
+ public:
+  Reader(const toml::table& t, std::string path, const std::string& file, int64_t line)
+      : t_(t), path_(std::move(path)), file_(file) {
+    const auto l = t.source().begin.line;
+    line_ = l > 0 ? int64_t(l) : line;
+  }
+
+  double number(std::string_view key, Range r, std::string_view unit) {
+    const toml::node& n = need(key);
+    double v;
+    if (const auto* i = n.as_integer()) {
+      v = double(i->get());
+    } else if (const auto* f = n.as_floating_point()) {
+      v = f->get();
+    } else {
+      throw bad(key, n, describe(r, unit), "wrong type");
+    }
+    const bool ok = std::isfinite(v) && (r == Range::any || (r == Range::positive ? v > 0 : v >= 0));
+    if (!ok) throw bad(key, n, describe(r, unit));
+    return v;
+  }
+
+  int integer(std::string_view key, int lo, int hi, std::string_view unit) {
+    const toml::node& n = need(key);
+    const std::string expected = "a whole number " + std::to_string(lo) + ".." + std::to_string(hi) +
+                                 (unit.empty() ? "" : " (" + std::string(unit) + ")");
+    const auto* i = n.as_integer();
+    if (!i) throw bad(key, n, expected, "wrong type");
+    if (i->get() < lo || i->get() > hi) throw bad(key, n, expected);
+    return int(i->get());
+  }
+
+  bool boolean(std::string_view key) {
+    const toml::node& n = need(key);
+    const auto* b = n.as_boolean();
+    if (!b) throw bad(key, n, "true or false", "wrong type");
+    return b->get();
+  }
+
+  std::string string(std::string_view key, const std::vector<std::string>& allowed) {
+    const toml::node& n = need(key);
+    std::string expected;
+    for (const auto& a : allowed) expected += (expected.empty() ? "one of " : ", ") + quote(a);
+    const auto* s = n.as_string();
+    if (!s) throw bad(key, n, expected, "wrong type");
+    if (std::find(allowed.begin(), allowed.end(), s->get()) == allowed.end()) throw bad(key, n, expected);
+    return s->get();
+  }
+
+  Reader table(std::string_view key) {
+    const toml::node& n = need(key);
+    const auto* t = n.as_table();
+    if (!t) throw bad(key, n, "a table [" + full(key) + "]", "wrong type");
+    return Reader(*t, full(key), file_, line_);
+  }
+
+  // The keys of this table, in file order, for tables of named entries.
+  std::vector<std::string> keys() const {
+    std::vector<std::string> k;
+    for (const auto& [key, node] : t_) k.emplace_back(key.str());
+    return k;
+  }
+
+  bool has(std::string_view key) const { return t_.contains(key); }
+
+  // Every key not read is an error: a typo must not fall back to a default.
+  void finish() const {
+    for (const auto& [key, node] : t_) {
+      if (used_.count(std::string(key.str()))) continue;
+      std::string known;
+      for (const auto& u : order_) known += (known.empty() ? "" : ", ") + u;
+      throw InputError(where(node) + full(key.str()), as_written(node), "one of: " + known, "unknown key");
+    }
+  }
+
+  // An error about this table as a whole, or about a relation between keys.
+  InputError error(std::string_view key, const std::string& value, const std::string& expected,
+                   const std::string& problem = {}) const {
+    const toml::node* n = t_.get(key);
+    return InputError((n ? where(*n) : where_table()) + full(key), value, expected, problem);
+  }
+
+  const std::string& path() const { return path_; }
+  int64_t line() const { return line_; }
+
+ private:
+  const toml::node& need(std::string_view key) {
+    const std::string k(key);
+    if (!used_.count(k)) order_.push_back(k);
+    used_.insert(k);
+    const toml::node* n = t_.get(key);
+    if (!n)
+      throw InputError(where_table() + full(key), "(none)", "the key in [" + path_ + "]", "missing key");
+    return *n;
+  }
+
+  InputError bad(std::string_view key, const toml::node& n, const std::string& expected,
+                 const std::string& problem = {}) const {
+    return InputError(where(n) + full(key), as_written(n), expected, problem);
+  }
+
+  std::string where(const toml::node& n) const {
+    const auto l = n.source().begin.line;
+    return file_ + ":" + std::to_string(l > 0 ? int64_t(l) : line_) + ": ";
+  }
+  std::string where_table() const { return file_ + ":" + std::to_string(line_) + ": "; }
+  std::string full(std::string_view key) const {
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+
+  const toml::table& t_;
+  std::string path_;
+  const std::string& file_;
+  int64_t line_ = 1;
+  std::set<std::string> used_;
+  std::vector<std::string> order_;  // keys asked for, in order, for "expected one of"
+};
+
+MotorParams read_motor(Reader r) {
+  MotorParams m{};
+  m.r_ohm = r.number("resistance_ohm", Range::positive, "ohm");
+  m.l_h = r.number("inductance_h", Range::positive, "H");
+  m.kt_nm_per_a = r.number("torque_constant_nm_per_a", Range::positive, "N*m/A");
+  m.ke_v_s_per_rad = r.number("back_emf_v_s_per_rad", Range::positive, "V*s/rad");
+  m.j_kg_m2 = r.number("inertia_kg_m2", Range::positive, "kg*m^2");
+  m.b_nm_s_per_rad = r.number("viscous_nm_s_per_rad", Range::non_negative, "N*m*s/rad");
+  m.coulomb_nm = r.number("coulomb_nm", Range::non_negative, "N*m");
+  m.stiction_nm = r.number("stiction_nm", Range::non_negative, "N*m");
+  if (m.stiction_nm < m.coulomb_nm) {
+    throw r.error("stiction_nm", format_number(m.stiction_nm),
+                  "stiction_nm >= coulomb_nm = " + format_number(m.coulomb_nm) +
+                      " (the breakaway torque is at least the sliding friction)");
+  }
+  r.finish();
+  return m;
+}
+
+DriveConfig read_drive(Reader r, double clock_hz) {
+  DriveConfig d{};
+  d.kind = r.string("kind", {"pwm", "dac"}) == "pwm" ? DriveConfig::Kind::Pwm : DriveConfig::Kind::Dac;
+  d.supply_v = r.number("supply_v", Range::positive, "V");
+  d.pwm_bits = r.integer("pwm_bits", 1, 15, "bits of the PWM counter");
+  d.pwm_hz = clock_hz / std::ldexp(1.0, d.pwm_bits);
+  d.pwm_switching = r.boolean("pwm_switching");
+  d.dac_bits = r.integer("dac_bits", 1, 16, "bits");
+  d.dac_range_v = r.number("dac_range_v", Range::positive, "V");
+  d.amp_gain = r.number("amp_gain", Range::positive, "V/V");
+  r.finish();
+  return d;
+}
+
+PidConfig read_pid(Reader r, double clock_hz) {
+  PidConfig p{};
+  p.kp = r.number("kp", Range::positive, "drive units per count");
+  p.ki = r.number("ki", Range::non_negative, "drive units per count*s");
+  p.kd = r.number("kd", Range::non_negative, "drive units per count/s");
+  p.tf_s = r.number("tf_s", Range::non_negative, "s");
+  p.ts_s = r.number("ts_s", Range::positive, "s");
+  p.ff1 = r.number("ff1", Range::any, "drive units per count/s");
+  p.ff2 = r.number("ff2", Range::any, "drive units per count/s^2");
+  p.out_limit = r.number("out_limit", Range::positive, "drive units");
+  if (p.out_limit > 32767) throw r.error("out_limit", format_number(p.out_limit), "0 < out_limit <= 32767");
+  const double cycles = p.ts_s * clock_hz;
+  if (std::fabs(cycles - std::round(cycles)) > 1e-6 * cycles) {
+    throw r.error("ts_s", format_number(p.ts_s),
+                  "a whole number of core clock cycles (1/clock_hz = " + format_number(1 / clock_hz) + " s)");
+  }
+  // The core must be able to hold the coefficients these gains give.
+  try {
+    mc::host::design({p.kp, p.ki, p.kd, p.tf_s, p.ts_s, p.ff1, p.ff2});
+  } catch (const InputError& e) {
+    throw r.error("kp", format_number(p.kp), "gains the core's coefficient words can hold", e.what());
+  }
+  r.finish();
+  return p;
+}
+
+AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
+  AxisConfig a{};
+  a.name = name;
+  a.lead_m_per_rev = r.number("lead_m_per_rev", Range::positive, "m");
+  a.gear_ratio = r.number("gear_ratio", Range::positive, "motor revs per screw rev");
+  a.load_kg = r.number("load_kg", Range::non_negative, "kg");
+  a.load_force_n = r.number("load_force_n", Range::any, "N");
+  a.encoder_cpr = r.integer("encoder_counts_per_rev", 4, 1 << 24, "counts per motor rev after 4x decoding");
+  a.max_following_error_m = r.number("max_following_error_m", Range::positive, "m");
+  a.max_speed_m_s = r.number("max_speed_m_s", Range::positive, "m/s");
+  a.motor = read_motor(r.table("motor"));
+  a.drive = read_drive(r.table("drive"), clock_hz);
+  a.pid = read_pid(r.table("pid"), clock_hz);
+  r.finish();
+  return a;
+}
+
+std::string lower(std::string_view s) {
+  std::string l(s);
+  for (char& c : l) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return l;
+}
+
+}  // namespace
+
+MachineConfig parse_machine(std::string_view toml_text, const std::string& source_name) {
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source_name + ":" + std::to_string(e.source().begin.line) + ": TOML",
+                     "column " + std::to_string(e.source().begin.column), "valid TOML",
+                     std::string(e.description()));
+  }
+  Reader top(root, "", source_name, 1);
+  MachineConfig m;
+  m.source = source_name;
+  {
+    Reader r = top.table("machine");
+    m.clock_hz = r.number("clock_hz", Range::positive, "Hz");
+    m.plant_dt_s = r.number("plant_dt_s", Range::positive, "s");
+    r.finish();
+  }
+  {
+    Reader r = top.table("host_loop");
+    m.host_period_s = r.number("period_s", Range::positive, "s");
+    m.host_io_latency_s = r.number("io_latency_s", Range::non_negative, "s");
+    m.host_dac_bits = r.integer("dac_bits", 1, 16, "bits");
+    m.host_dac_range_v = r.number("dac_range_v", Range::positive, "V");
+    r.finish();
+  }
+  Reader axes = top.table("axis");
+  const std::vector<std::string> names = {"x", "y", "z"};
+  for (const std::string& k : axes.keys()) {
+    if (std::find(names.begin(), names.end(), k) == names.end()) {
+      throw axes.error(k, "[axis." + k + "]", "axes x, y and optionally z", "unknown axis");
+    }
+  }
+  for (const std::string& n : names) {
+    if (n == "z" && !axes.has(n)) continue;
+    m.axes.push_back(read_axis(axes.table(n), n, m.clock_hz));
+  }
+  axes.finish();
+  top.finish();
+  return m;
+}
+
+MachineConfig load_machine(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("--config", quote(path), "a readable machine config file (TOML)", "cannot open");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_machine(text.str(), path);
+}
+
+MachineConfig machine_or_default(const std::string& path) {
+  return path.empty() ? default_machine() : load_machine(path);
+}
+
+const AxisConfig& axis(const MachineConfig& m, std::string_view name) {
+  std::string valid;
+  for (const AxisConfig& a : m.axes) {
+    if (lower(a.name) == lower(name)) return a;
+    valid += (valid.empty() ? "" : ", ") + a.name;
+  }
+  throw InputError("axis", quote(name), "one of the axes in " + m.source + ": " + valid, "no such axis");
+}
+
+double counts_per_m(const AxisConfig& a) {
+  return a.encoder_cpr * a.gear_ratio / a.lead_m_per_rev;
+}
+
+double reflected_inertia_kg_m2(const AxisConfig& a) {
+  const double r = a.lead_m_per_rev / (2 * kPi * a.gear_ratio);  // m of travel per rad of motor
+  return a.load_kg * r * r;
+}
+
+double reflected_torque_nm(const AxisConfig& a) {
+  return a.load_force_n * a.lead_m_per_rev / (2 * kPi * a.gear_ratio);
+}
+
+AxisModel axis_model(const AxisConfig& a) {
+  const MotorParams& m = a.motor;
+  const double j = m.j_kg_m2 + reflected_inertia_kg_m2(a);
+  const double den = m.kt_nm_per_a * m.ke_v_s_per_rad + m.r_ohm * m.b_nm_s_per_rad;
+  const double k_dc = m.kt_nm_per_a / den;  // rad/s per V
+  const double volts_per_unit = a.drive.supply_v / 32767.0;
+  const double counts_per_rad = a.encoder_cpr / (2 * M_PI);
+  return {volts_per_unit * k_dc * counts_per_rad, m.r_ohm * j / den};
+}
+
+mc::host::PidGains tuned_gains(const AxisConfig& a, double ts_s, double delay_s) {
+  const AxisModel g = axis_model(a);
+  const double w0 = 3 * a.pid.ki / a.pid.kp;
+  const double w = std::min(w0, 1 / (4 * delay_s));
+  mc::host::PidGains out{};
+  out.kp = 3 * g.tau * w * w / g.kg;
+  out.ki = g.tau * w * w * w / g.kg;
+  out.kd = std::max(0.0, (3 * g.tau * w - 1) / g.kg);
+  out.tf = 1 / (10 * w);
+  out.ts = ts_s;
+  return out;
+}
+
+}  // namespace mc::machine

@@ -1,0 +1,107 @@
+// The machine description: axes (motor, transmission, encoder, drive, gains),
+// the co-simulation's time base and the host-loop model, read from one TOML
+// file. configs/default.toml is the reference for every key (unit, meaning)
+// and is compiled in as the built-in default.
+//
+// All values are SI; each key's name carries its unit. Reading is strict:
+// a missing key, an unknown key (a typo), a value of the wrong type or out of
+// range is an mc::host::InputError that names the file, the line and the key,
+// so that a misspelt key can never fall back to a default silently.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "host/control/pid_design.hpp"
+
+namespace mc::machine {
+
+struct MotorParams {
+  double r_ohm;           // terminal resistance
+  double l_h;             // terminal inductance
+  double kt_nm_per_a;     // torque constant
+  double ke_v_s_per_rad;  // back-EMF constant
+  double j_kg_m2;         // rotor inertia (the motor alone)
+  double b_nm_s_per_rad;  // viscous friction at the motor shaft
+  double coulomb_nm;      // Coulomb (sliding) friction at the motor shaft
+  double stiction_nm;     // static friction: breakaway torque, >= coulomb_nm
+};
+
+struct DriveConfig {
+  enum class Kind { Pwm, Dac } kind;
+  double supply_v;  // the bridge supply: the terminal voltage saturates here
+  // PWM H-bridge: a pwm_bits counter at the core clock, duty = |u| >> (15 - pwm_bits).
+  int pwm_bits;
+  double pwm_hz;       // derived: clock_hz / 2^pwm_bits
+  bool pwm_switching;  // true: the co-sim applies +-supply/0 per plant step; false: the average
+  // DAC + linear amplifier (the paper's drive).
+  int dac_bits;
+  double dac_range_v;  // the DAC spans +-dac_range_v
+  double amp_gain;     // V at the motor per V from the DAC
+};
+
+// In core units (host/pid_design.hpp): drive units (+-32767) per encoder count.
+struct PidConfig {
+  double kp, ki, kd, tf_s, ts_s, ff1 = 0, ff2 = 0;
+  double out_limit = 32767;
+};
+
+struct AxisConfig {
+  std::string name;
+  MotorParams motor;
+  double lead_m_per_rev;  // table travel per screw revolution
+  double gear_ratio;      // motor revolutions per screw revolution
+  double load_kg;         // moving mass (table, carriage, workpiece)
+  double load_force_n;    // constant force opposing +travel (gravity on Z, a spring...)
+  int encoder_cpr;        // counts per motor revolution after 4x decoding
+  DriveConfig drive;
+  PidConfig pid;
+  double max_following_error_m;
+  double max_speed_m_s;
+};
+
+struct MachineConfig {
+  std::string source;  // file path or "built-in default"
+  double clock_hz = 12e6;
+  double plant_dt_s = 1e-6;
+  std::vector<AxisConfig> axes;  // x, y, optional z, in that order
+  double host_period_s = 0.01;
+  double host_io_latency_s = 0.001;
+  int host_dac_bits = 12;
+  double host_dac_range_v = 10;
+};
+
+// Throws mc::host::InputError "file:line: key = value: ...; expected ..." on
+// a missing file, bad TOML, bad/missing/unknown keys, out-of-range values.
+MachineConfig load_machine(const std::string& path);
+MachineConfig parse_machine(std::string_view toml_text, const std::string& source_name);
+// configs/default.toml as compiled in: works from any directory.
+MachineConfig default_machine();
+std::string_view default_machine_toml();
+// load_machine(path), or default_machine() when path is empty.
+MachineConfig machine_or_default(const std::string& path);
+
+// Case-insensitive; throws InputError listing the valid names.
+const AxisConfig& axis(const MachineConfig& m, std::string_view name);
+
+// Encoder counts per metre of table travel: encoder_cpr * gear_ratio / lead.
+double counts_per_m(const AxisConfig& a);
+// The load seen at the motor shaft through the screw and gear:
+// m * (lead / (2 pi gear))^2, and force * lead / (2 pi gear).
+double reflected_inertia_kg_m2(const AxisConfig& a);
+double reflected_torque_nm(const AxisConfig& a);
+
+// The linearized axis: Kg in counts/s per drive unit, tau in s.
+struct AxisModel {
+  double kg, tau;
+};
+AxisModel axis_model(const AxisConfig& a);
+
+// Closed-loop poles placed at a triple real pole -w on the linearized axis
+// G(s) = Kg / (s (tau s + 1)) (u in drive units, position in counts), with
+// w = min(w0, 1 / (4 delay)): the loop keeps about 14 degrees of phase for
+// its delay. w0 comes from the machine's gains: for this rule Ki/Kp = w/3.
+mc::host::PidGains tuned_gains(const AxisConfig& a, double ts_s, double delay_s);
+
+}  // namespace mc::machine

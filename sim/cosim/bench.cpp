@@ -1,0 +1,504 @@
+#include "sim/cosim/bench.hpp"
+
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <systemc>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <tuple>
+
+#include "host/base/errors.hpp"
+#include "sim/cosim/core_model.hpp"
+#include "sim/cosim/rtl_core.hpp"
+
+namespace mc::sim {
+
+namespace fs = std::filesystem;
+
+BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<RunSpec> specs;
+  std::vector<Platform> platforms;
+  for (const Platform& p : bench_platforms(o.machine))
+    if (o.platforms.empty() || std::count(o.platforms.begin(), o.platforms.end(), p.name))
+      platforms.push_back(p);
+  for (const std::string& n : o.platforms) find_platform(o.machine, n);  // names checked
+  std::vector<Scenario> scenarios;
+  for (const Scenario& s : bench_scenarios(o.quick))
+    if (o.scenarios.empty() || std::count(o.scenarios.begin(), o.scenarios.end(), s.name))
+      scenarios.push_back(s);
+  for (const std::string& n : o.scenarios) find_scenario(n, o.quick);
+  for (const Scenario& s : scenarios)
+    for (GainPolicy g : o.policies)
+      for (const Platform& p : platforms) {
+        RunSpec r;
+        r.machine = o.machine;
+        r.platform = p;
+        r.scenario = s;
+        r.policy = g;
+        r.engine = o.engine;
+        r.seed = o.seed;
+        r.jitter = o.jitter;
+        // Every 10 us: fine enough for the contour error at the bench feeds
+        // (0.25 um of travel), small enough files.
+        r.record_dt_s = 1e-5;
+        specs.push_back(std::move(r));
+      }
+  // The slowest first, so that the pool ends together.
+  std::vector<size_t> order(specs.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const auto cost = [](const RunSpec& s) { return s.scenario.duration_s * (s.platform.host ? 0.1 : 1.0); };
+    return cost(specs[a]) > cost(specs[b]);
+  });
+
+  BenchResult res;
+  res.runs.resize(specs.size());
+  std::vector<std::pair<size_t, std::unique_ptr<Child>>> running;
+  size_t next = 0;
+  int done = 0;
+  const int total = int(specs.size());
+  std::string last;
+  while (done < total) {
+    while (next < order.size() && int(running.size()) < std::max(1, o.jobs)) {
+      const size_t i = order[next++];
+      running.emplace_back(i, std::make_unique<Child>(specs[i]));
+    }
+    std::vector<pollfd> fds;
+    fds.reserve(running.size());
+    for (auto& [i, c] : running) fds.push_back({c->fd(), POLLIN, 0});
+    if (::poll(fds.data(), fds.size(), 500) < 0 && errno != EINTR)
+      throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
+    for (size_t k = 0; k < running.size();) {
+      auto& [i, c] = running[k];
+      if (fds[k].revents && !c->pump()) {
+        res.runs[i] = c->result();
+        ++done;
+        last = specs[i].platform.name + " " + specs[i].scenario.name + " " + policy_name(specs[i].policy);
+        running.erase(running.begin() + long(k));
+        fds.erase(fds.begin() + long(k));
+        continue;
+      }
+      ++k;
+    }
+    double frac = 0;
+    for (auto& [i, c] : running) frac += c->progress();
+    if (status) status(done, total, last, frac);
+  }
+  if (o.probe_kernel && o.engine == Engine::Rtl) res.probe = probe_kernel(o.machine, o.quick ? 2e-4 : 2e-3);
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+// ---------------------------------------------------------------------------
+// The kernel-choice probe.
+namespace {
+
+// The core as a clocked SystemC module: the Verilated model evaluated by an
+// SC_METHOD on every rising edge of an sc_clock, as Verilator's --sc wrapper
+// runs it.
+SC_MODULE(ClockedCore) {
+  sc_core::sc_in<bool> clk;
+  std::unique_ptr<CoreModel> core = make_rtl_core();
+  CoreIn in;
+  uint64_t cycles = 0;
+  SC_HAS_PROCESS(ClockedCore);
+  // SystemC's module naming takes the name by value.
+  explicit ClockedCore(sc_core::sc_module_name n)  // NOLINT(performance-unnecessary-value-param)
+      : sc_core::sc_module(n) {
+    SC_METHOD(edge);
+    sensitive << clk.pos();
+    dont_initialize();
+  }
+  void edge() {
+    in.rst = cycles < 4;
+    core->cycle(in);
+    ++cycles;
+  }
+};
+
+// The core stepped inside one process, synchronizing every 100 us.
+SC_MODULE(DecoupledCore) {
+  std::unique_ptr<CoreModel> core = make_rtl_core();
+  CoreIn in;
+  uint64_t cycles = 0, quantum = 1200;
+  double clock_hz = 12e6;
+  SC_HAS_PROCESS(DecoupledCore);
+  // SystemC's module naming takes the name by value.
+  explicit DecoupledCore(sc_core::sc_module_name n)  // NOLINT(performance-unnecessary-value-param)
+      : sc_core::sc_module(n) {
+    SC_THREAD(run);
+  }
+  void run() {
+    const sc_core::sc_time q(double(quantum) / clock_hz, sc_core::SC_SEC);
+    for (;;) {
+      for (uint64_t i = 0; i < quantum; ++i) {
+        in.rst = cycles < 4;
+        core->cycle(in);
+        ++cycles;
+      }
+      wait(q);
+    }
+  }
+};
+
+// Runs f in a child process and returns the double it computes.
+template <typename F>
+double in_child(F f) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    double v = f();
+    if (::write(fds[1], &v, sizeof v) != sizeof v) _exit(1);
+    _exit(0);
+  }
+  ::close(fds[1]);
+  double v = 0;
+  const bool ok = ::read(fds[0], &v, sizeof v) == sizeof v;
+  ::close(fds[0]);
+  ::waitpid(pid, nullptr, 0);
+  if (!ok) throw std::runtime_error("kernel probe failed");
+  return v;
+}
+
+}  // namespace
+
+KernelProbe probe_kernel(const MachineConfig& m, double sim_s) {
+  KernelProbe p;
+  p.probe_sim_s = sim_s;
+  const double period = 1 / m.clock_hz;
+  p.clocked_speed = in_child([&] {
+    sc_core::sc_clock clk("clk", sc_core::sc_time(period, sc_core::SC_SEC));
+    ClockedCore c("core");
+    c.clk(clk);
+    const auto t0 = std::chrono::steady_clock::now();
+    sc_core::sc_start(sc_core::sc_time(sim_s, sc_core::SC_SEC));
+    return sim_s / std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  });
+  p.decoupled_speed = in_child([&] {
+    DecoupledCore c("core");
+    c.quantum = uint64_t(std::llround(100e-6 * m.clock_hz));
+    c.clock_hz = m.clock_hz;
+    const auto t0 = std::chrono::steady_clock::now();
+    sc_core::sc_start(sc_core::sc_time(sim_s, sc_core::SC_SEC));
+    return sim_s / std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  });
+  return p;
+}
+
+// ---------------------------------------------------------------------------
+// Output files.
+namespace {
+
+std::string fmt(double v, int prec = 3) {
+  if (std::isnan(v)) return "n/a";
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(prec);
+  s << v;
+  return s.str();
+}
+std::string um(double m) {
+  return fmt(m * 1e6, m * 1e6 < 10 ? 3 : 1);
+}
+std::string ms(double s) {
+  return std::isnan(s) ? "not settled" : fmt(s * 1e3, 2);
+}
+std::string tag(const RunResult& r) {
+  return r.platform + "_" + r.scenario + "_" + r.policy;
+}
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream f(p);
+  f << text;
+  if (!f) throw mc::host::InputError("--out", "'" + p.string() + "'", "a writable directory");
+}
+
+void run_gnuplot(const fs::path& script) {
+  const std::string cmd = "gnuplot '" + script.string() + "' 2>&1";
+  std::string out;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) throw std::runtime_error("cannot run gnuplot");
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  const int rc = ::pclose(p);
+  if (rc != 0) throw std::runtime_error("gnuplot failed on " + script.string() + ": " + out);
+}
+
+}  // namespace
+
+std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& br) {
+  const fs::path dir(o.out_dir);
+  std::error_code ec;
+  fs::create_directories(dir / "data", ec);
+  fs::create_directories(dir / "plots", ec);
+  if (ec) throw mc::host::InputError("--out", "'" + o.out_dir + "'", "a directory that can be created");
+  std::vector<std::string> written;
+
+  // results.csv
+  std::ostringstream csv;
+  csv << "platform,scenario,policy,engine,ts_s,kp_per_count,ki_per_count_s,kd_per_count_per_s,tf_s,"
+         "follow_rms_x_um,follow_max_x_um,follow_rms_y_um,follow_max_y_um,contour_rms_um,contour_max_um,"
+         "settling_time_s,overshoot_pct,rise_time_s,tracking,sim_s,wall_s,sim_speed_x_real_time\n";
+  for (const RunResult& r : br.runs) {
+    const bool step = r.scenario == "step";
+    csv << r.platform << ',' << r.scenario << ',' << r.policy << ',' << r.engine << ',' << r.gains.ts << ','
+        << r.gains.kp << ',' << r.gains.ki << ',' << r.gains.kd << ',' << r.gains.tf << ','
+        << r.follow[0].rms * 1e6 << ',' << r.follow[0].max * 1e6 << ',' << r.follow[1].rms * 1e6 << ','
+        << r.follow[1].max * 1e6 << ',';
+    if (step)
+      csv << ",," << r.step.settling_s << ',' << r.step.overshoot_pct << ',' << r.step.rise_s;
+    else
+      csv << r.contour.rms * 1e6 << ',' << r.contour.max * 1e6 << ",,,";
+    csv << ',' << (r.tracking ? 1 : 0) << ',' << r.sim_s << ',' << r.wall_s << ',' << r.sim_s / r.wall_s
+        << '\n';
+  }
+  write_file(dir / "results.csv", csv.str());
+  written.push_back((dir / "results.csv").string());
+
+  // Traces for the plots: t, command and position of both axes, errors.
+  for (const RunResult& r : br.runs) {
+    std::ostringstream d;
+    d << "# t_s cmd_x_m cmd_y_m pos_x_m pos_y_m err_x_um err_y_um\n";
+    const size_t stride = std::max<size_t>(1, r.t.size() / 20000);
+    for (size_t i = 0; i < r.t.size(); i += stride)
+      d << r.t[i] << ' ' << r.cmd_m[0][i] << ' ' << r.cmd_m[1][i] << ' ' << r.pos_m[0][i] << ' '
+        << r.pos_m[1][i] << ' ' << (r.cmd_m[0][i] - r.pos_m[0][i]) * 1e6 << ' '
+        << (r.cmd_m[1][i] - r.pos_m[1][i]) * 1e6 << '\n';
+    write_file(dir / "data" / (tag(r) + ".dat"), d.str());
+  }
+
+  // Grouping for the tables and plots.
+  std::vector<std::string> platform_order, scenario_order;
+  for (const RunResult& r : br.runs) {
+    if (!std::count(platform_order.begin(), platform_order.end(), r.platform))
+      platform_order.push_back(r.platform);
+    if (!std::count(scenario_order.begin(), scenario_order.end(), r.scenario))
+      scenario_order.push_back(r.scenario);
+  }
+  std::vector<std::string> all_p;
+  for (const Platform& p : bench_platforms(o.machine)) all_p.push_back(p.name);
+  std::sort(platform_order.begin(), platform_order.end(), [&](const std::string& a, const std::string& b) {
+    return std::find(all_p.begin(), all_p.end(), a) < std::find(all_p.begin(), all_p.end(), b);
+  });
+  const auto find = [&](const std::string& p, const std::string& s, const char* pol) -> const RunResult* {
+    for (const RunResult& r : br.runs)
+      if (r.platform == p && r.scenario == s && r.policy == pol) return &r;
+    return nullptr;
+  };
+  std::vector<const char*> policies;
+  for (GainPolicy g : o.policies) policies.push_back(policy_name(g));
+
+  // report.md
+  std::ostringstream md;
+  md << "# MotionCore sample-period benchmark\n\n";
+  md << "Machine: " << o.machine.source << " (XY table, " << o.machine.axes[0].name << "/"
+     << o.machine.axes[1].name << "); core clock " << o.machine.clock_hz / 1e6 << " MHz; plant step "
+     << o.machine.plant_dt_s * 1e6 << " us. FPGA engine: " << engine_name(o.engine)
+     << ". Host loop: " << o.machine.host_period_s * 1e3 << " ms nominal, I/O latency "
+     << o.machine.host_io_latency_s * 1e3 << " ms, " << o.machine.host_dac_bits
+     << "-bit DAC, wake-up jitter from " << o.jitter.source << ". Seed " << o.seed << "."
+     << (o.quick ? " **Quick run: shortened scenarios, not for comparison.**" : "") << "\n\n";
+  md << "Scenarios:\n";
+  for (const Scenario& s : bench_scenarios(o.quick))
+    if (std::count(scenario_order.begin(), scenario_order.end(), s.name))
+      md << "- `" << s.name << "`: " << s.describe() << "\n";
+  md << "\nGain policies: `same` = the machine's one continuous PID design (configs: [axis.*.pid]) "
+        "discretized at every Ts, the paper's method; `tuned` = per platform, closed-loop poles at a triple "
+        "real pole -w with w = min(w0, 1/(4 x loop delay)), where the loop delay is half a sample plus the "
+        "computation or I/O latency (and the mean wake-up lateness for the host). Following error = command "
+        "- "
+        "actual table position; contour error = distance of the actual point from the ideal line or circle. "
+        "`tracking` = the run ends within a quarter of the move of its command (no: it oscillates, diverged "
+        "or "
+        "has not caught up yet; the plots tell which).\n\n";
+  for (const std::string& s : scenario_order) {
+    for (const char* pol : policies) {
+      md << "## " << s << ", " << pol << " gains\n\n";
+      if (s == "step")
+        md << "| platform | Ts | RMS follow x (um) | max follow x (um) | settling 2% (ms) | overshoot (%) | "
+              "tracking |\n|---|---|---|---|---|---|---|\n";
+      else
+        md << "| platform | Ts | RMS contour (um) | max contour (um) | RMS follow x (um) | RMS follow y (um) "
+              "| "
+              "max follow (um) | tracking |\n|---|---|---|---|---|---|---|---|\n";
+      for (const std::string& p : platform_order) {
+        const RunResult* r = find(p, s, pol);
+        if (!r) continue;
+        md << "| " << p << " | " << fmt(r->gains.ts * 1e6, 2) << " us | ";
+        if (s == "step")
+          md << um(r->follow[0].rms) << " | " << um(r->follow[0].max) << " | " << ms(r->step.settling_s)
+             << " | " << fmt(r->step.overshoot_pct, 1) << " | ";
+        else
+          md << um(r->contour.rms) << " | " << um(r->contour.max) << " | " << um(r->follow[0].rms) << " | "
+             << um(r->follow[1].rms) << " | " << um(std::max(r->follow[0].max, r->follow[1].max)) << " | ";
+        md << (r->tracking ? "yes" : "**no**") << " |\n";
+      }
+      md << "\n";
+    }
+  }
+  // A short reading: the headline ratios.
+  md << "## Reading\n\n";
+  for (const char* pol : policies) {
+    for (const std::string& s : scenario_order) {
+      const RunResult* host = find("host-10ms", s, pol);
+      const RunResult* f10 = find("fpga-10ms", s, pol);
+      const RunResult* fmin = find("fpga-min", s, pol);
+      const RunResult* f100 = find("fpga-100us", s, pol);
+      const auto err = [&](const RunResult* r) { return s == "step" ? r->follow[0].rms : r->contour.rms; };
+      const char* what = s == "step" ? "RMS following error" : "RMS contour error";
+      if (host && f10)
+        md << "- " << s << ", " << pol << ": " << what << " " << um(err(host)) << " um on the 10 ms host loop"
+           << (host->tracking ? "" : " (off the command at the end)") << " against " << um(err(f10))
+           << " um on the FPGA at the same Ts" << (f10->tracking ? "" : " (off the command at the end)");
+      else if (f10)
+        md << "- " << s << ", " << pol << ": " << what << " " << um(err(f10)) << " um at fpga-10ms";
+      else
+        continue;
+      if (f100) md << ", " << um(err(f100)) << " um at 100 us";
+      if (fmin)
+        md << " and " << um(err(fmin)) << " um at the shortest Ts (" << fmt(fmin->gains.ts * 1e6, 2)
+           << " us)";
+      md << ".\n";
+    }
+  }
+  md << "\nWhat the numbers mean: at the same Ts the FPGA loop differs from the PC loop only by the PC's "
+        "jitter, its I/O latency and its DAC; shortening Ts removes the sample-and-hold delay, which lets "
+        "the "
+        "tuned policy raise the loop bandwidth until the plant's own design bandwidth (w0) is reached, so "
+        "the "
+        "error stops falling below a few hundred microseconds. With the same gains at every Ts, a design "
+        "made "
+        "for a fast loop can be unstable at 10 ms.\n\n";
+
+  // Speed.
+  md << "## Simulation speed\n\n| platform | engine | simulated s | wall s | x real time "
+        "|\n|---|---|---|---|---|\n";
+  std::map<std::string, std::pair<double, double>> speed;
+  for (const RunResult& r : br.runs) {
+    auto& e = speed[r.platform + " | " + r.engine];
+    e.first += r.sim_s;
+    e.second += r.wall_s;
+  }
+  for (const std::string& p : platform_order)
+    for (const auto& [k, v] : speed)
+      if (k.rfind(p + " |", 0) == 0)
+        md << "| " << k << " | " << fmt(v.first, 2) << " | " << fmt(v.second, 2) << " | "
+           << fmt(v.first / v.second, 3) << " |\n";
+  md << "\nGoals: the RTL co-simulation of the two-axis loop at the " << o.machine.clock_hz / 1e6
+     << " MHz core clock at least 1x real time on one core; the twin-only path at least 100x. "
+        "`motionctl bench --engine twin` runs the twin path. The whole benchmark took "
+     << fmt(br.wall_s, 1) << " s of wall time with " << o.jobs << " jobs.\n\n";
+  if (br.probe.probe_sim_s > 0)
+    md << "SystemC kernel choice (probe of " << br.probe.probe_sim_s * 1e3
+       << " ms of core time, no plant): the "
+       << "Verilated core as a module clocked by an sc_clock runs at " << fmt(br.probe.clocked_speed, 4)
+       << "x real time; stepped inside one process that synchronizes every 100 us (temporal decoupling) at "
+       << fmt(br.probe.decoupled_speed, 4) << "x. The co-simulation uses the second (docs/decisions.md).\n\n";
+  md << "Files: results.csv (one row per platform x scenario x policy), data/*.dat (traces), plots/*.png.\n";
+  write_file(dir / "report.md", md.str());
+  written.push_back((dir / "report.md").string());
+  if (!o.plots) return written;
+
+  // Plots.
+  const auto dat = [&](const RunResult& r) { return (dir / "data" / (tag(r) + ".dat")).string(); };
+  for (const std::string& s : scenario_order)
+    for (const char* pol : policies) {
+      const fs::path png = dir / "plots" / ("following_" + s + "_" + pol + ".png");
+      std::ostringstream gp;
+      gp << "set terminal pngcairo size 1000,600\nset output '" << png.string() << "'\n"
+         << "set title 'Following error, x axis: " << s << ", " << pol << " gains'\nset xlabel 'time (s)'\n"
+         << "set ylabel 'command - position (um)'\nset grid\nset key outside right\nplot ";
+      bool first = true;
+      for (const std::string& p : platform_order) {
+        const RunResult* r = find(p, s, pol);
+        if (!r) continue;
+        gp << (first ? "" : ", ") << "'" << dat(*r) << "' using 1:6 with lines title '" << p << "'";
+        first = false;
+      }
+      gp << "\n";
+      write_file(dir / "plots" / ("following_" + s + "_" + pol + ".gp"), gp.str());
+      run_gnuplot(dir / "plots" / ("following_" + s + "_" + pol + ".gp"));
+      written.push_back(png.string());
+    }
+  if (std::count(scenario_order.begin(), scenario_order.end(), "circle")) {
+    // The circle's radial error is microns on millimetres: magnify it.
+    const double r0 = find_scenario("circle", o.quick).size_m;
+    const double mag = 20;
+    for (const char* pol : policies) {
+      const fs::path png = dir / "plots" / (std::string("circle_xy_") + pol + ".png");
+      std::ostringstream gp;
+      gp << "set terminal pngcairo size 900,900\nset output '" << png.string() << "'\nset size square\n"
+         << "set title 'Circle R " << r0 * 1e3 << " mm, " << pol << " gains: radial error magnified x" << mag
+         << "'\nset xlabel 'x (mm)'\nset ylabel 'y (mm)'\nset grid\nset key outside right\n"
+         << "cx = " << -r0 << "\nR = " << r0 << "\nM = " << mag << "\n"
+         << "rad(x,y) = sqrt((x-cx)**2 + y**2)\n"
+         << "mx(x,y) = (cx + (x-cx) * (R + M*(rad(x,y)-R)) / rad(x,y)) * 1e3\n"
+         << "my(x,y) = (y * (R + M*(rad(x,y)-R)) / rad(x,y)) * 1e3\nplot ";
+      gp << "'" << dat(*find(platform_order.front(), "circle", pol))
+         << "' using (mx($2,$3)):(my($2,$3)) with lines lw 2 "
+         << "dt 2 title 'command'";
+      for (const std::string& p : platform_order) {
+        const RunResult* r = find(p, "circle", pol);
+        if (r) gp << ", '" << dat(*r) << "' using (mx($4,$5)):(my($4,$5)) with lines title '" << p << "'";
+      }
+      gp << "\n";
+      write_file(dir / "plots" / (std::string("circle_xy_") + pol + ".gp"), gp.str());
+      run_gnuplot(dir / "plots" / (std::string("circle_xy_") + pol + ".gp"));
+      written.push_back(png.string());
+    }
+  }
+  {
+    // Contour error against Ts: FPGA platforms as lines, the host as points.
+    std::vector<const RunResult*> rows;
+    for (const RunResult& r : br.runs)
+      if (r.scenario != "step") rows.push_back(&r);
+    std::sort(rows.begin(), rows.end(), [](const RunResult* a, const RunResult* b) {
+      return std::tie(a->policy, a->scenario, a->gains.ts) < std::tie(b->policy, b->scenario, b->gains.ts);
+    });
+    std::ostringstream d;
+    d << "# policy scenario platform ts_s rms_um host\n";
+    for (const RunResult* r : rows)
+      d << r->policy << ' ' << r->scenario << ' ' << r->platform << ' ' << r->gains.ts << ' '
+        << r->contour.rms * 1e6 << ' ' << (r->platform.rfind("host", 0) == 0 ? 1 : 0) << '\n';
+    write_file(dir / "data" / "contour_vs_ts.dat", d.str());
+    const fs::path png = dir / "plots" / "contour_vs_ts.png";
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 1000,600\nset output '" << png.string() << "'\nset logscale xy\n"
+       << "set title 'RMS contour error against sample period'\nset xlabel 'Ts (s)'\nset ylabel 'RMS contour "
+          "error (um)'\n"
+       << "set grid\nset key outside right\nf = '" << (dir / "data" / "contour_vs_ts.dat").string()
+       << "'\nplot ";
+    bool first = true;
+    for (const char* pol : policies)
+      for (const std::string& s : scenario_order) {
+        if (s == "step") continue;
+        const std::string sel = "(strcol(1) eq '" + std::string(pol) + "' && strcol(2) eq '" + s + "'";
+        gp << (first ? "" : ", ") << "f using " << sel
+           << " && $6 == 0 ? $4 : NaN):5 with linespoints title 'FPGA " << s << " " << pol << "', f using "
+           << sel << " && $6 == 1 ? $4 : NaN):5 with points pt 7 ps 2 title 'host " << s << " " << pol << "'";
+        first = false;
+      }
+    gp << "\n";
+    write_file(dir / "plots" / "contour_vs_ts.gp", gp.str());
+    if (!first) {
+      run_gnuplot(dir / "plots" / "contour_vs_ts.gp");
+      written.push_back(png.string());
+    }
+  }
+  return written;
+}
+
+}  // namespace mc::sim

@@ -1,0 +1,712 @@
+#include "sim/cosim/cosim.hpp"
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <systemc>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "hls/interp_core.hpp"
+#include "hls/pid_regs.hpp"
+#include "host/base/errors.hpp"
+#include "host/motion/interp_plan.hpp"
+#include "sim/cosim/core_model.hpp"
+#include "sim/cosim/rtl_core.hpp"
+#include "sim/plant/dc_motor.hpp"
+#include "sim/plant/host_loop.hpp"
+
+namespace mc::sim {
+
+using mc::host::InputError;
+
+const char* engine_name(Engine e) {
+  return e == Engine::Rtl ? "rtl" : "twin";
+}
+const char* policy_name(GainPolicy p) {
+  return p == GainPolicy::Same ? "same" : "tuned";
+}
+
+namespace {
+
+constexpr int kLatency = mc::pid_latency(kCoreAxes);
+
+// Clocks per plant step: the plant step must be a whole number of clocks,
+// so that pins and drive change on clock edges.
+uint32_t clocks_per_step(const MachineConfig& m) {
+  const double k = m.clock_hz * m.plant_dt_s;
+  if (!(k >= 1) || std::fabs(k - std::round(k)) > 1e-6)
+    throw InputError("plant_dt_s * clock_hz (" + m.source + ")", std::to_string(k),
+                     "a whole number of core clocks per plant step");
+  return uint32_t(std::llround(k));
+}
+
+uint32_t ts_cycles(const MachineConfig& m, double ts) {
+  const double c = std::round(ts * m.clock_hz);
+  return uint32_t(std::max<double>(kLatency, c));
+}
+
+}  // namespace
+
+double fpga_min_ts(const MachineConfig& m) {
+  return kLatency / m.clock_hz;
+}
+
+std::vector<Platform> bench_platforms(const MachineConfig& m) {
+  return {
+      {"host-10ms", true, m.host_period_s}, {"fpga-10ms", false, 10e-3}, {"fpga-1ms", false, 1e-3},
+      {"fpga-100us", false, 100e-6},        {"fpga-10us", false, 10e-6}, {"fpga-min", false, fpga_min_ts(m)}};
+}
+
+Platform find_platform(const MachineConfig& m, const std::string& name) {
+  std::string names;
+  for (const Platform& p : bench_platforms(m)) {
+    if (p.name == name) return p;
+    names += (names.empty() ? "" : ", ") + p.name;
+  }
+  throw InputError("platform", "'" + name + "'", "one of " + names);
+}
+
+std::string Scenario::describe() const {
+  std::ostringstream s;
+  switch (kind) {
+    case ScenarioKind::Step:
+      s << "x position step of " << size_m * 1e3 << " mm";
+      break;
+    case ScenarioKind::Line:
+      s << "XY line of " << size_m * 1e3 << " mm at " << angle_deg << " deg, " << feed_m_s * 1e3 << " mm/s";
+      break;
+    case ScenarioKind::Circle:
+      s << "XY circle of radius " << size_m * 1e3 << " mm (stairs interpolator), " << feed_m_s * 1e3
+        << " mm/s";
+      break;
+  }
+  s << ", " << duration_s << " s";
+  return s.str();
+}
+
+std::vector<Scenario> bench_scenarios(bool quick) {
+  const double settle = quick ? 0.05 : 0.2;
+  const double feed = 0.025;  // 1500 mm/min: a small router's cutting feed
+  const double line = quick ? 0.002 : 0.02, radius = quick ? 0.0005 : 0.005;
+  return {{"step", ScenarioKind::Step, 0.001, 0, 0, quick ? 0.05 : 0.3},
+          {"line-45", ScenarioKind::Line, line, 45, feed, line / feed + settle},
+          {"line-30", ScenarioKind::Line, line, 30, feed, line / feed + settle},
+          {"circle", ScenarioKind::Circle, radius, 0, feed, 2 * M_PI * radius / feed + settle}};
+}
+
+Scenario find_scenario(const std::string& name, bool quick) {
+  std::string names;
+  for (const Scenario& s : bench_scenarios(quick)) {
+    if (s.name == name) return s;
+    names += (names.empty() ? "" : ", ") + s.name;
+  }
+  throw InputError("scenario", "'" + name + "'", "one of " + names);
+}
+
+double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHistogram& jitter) {
+  // The board: half a period of hold, and the sweep's latency plus the drive
+  // register and the PWM: a bound, as each axis's drive takes its output
+  // before the sweep ends (MotionCore::drv_clock), the last one
+  // 5 clocks earlier (LATENCY - drv_clock(NAXES - 1) for every NAXES).
+  if (!p.host) return 0.5 * ts_cycles(m, p.ts_s) / m.clock_hz + (kLatency + 2) / m.clock_hz;
+  double mean = 0, n = 0;
+  for (size_t i = 0; i < jitter.count.size(); ++i) {
+    mean += 0.5 * (jitter.lo_s[i] + jitter.hi_s[i]) * double(jitter.count[i]);
+    n += double(jitter.count[i]);
+  }
+  return 0.5 * p.ts_s + m.host_io_latency_s + (n > 0 ? mean / n : 0);
+}
+
+mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p,
+                             GainPolicy policy, const JitterHistogram& jitter) {
+  const double ts = p.host ? p.ts_s : ts_cycles(m, p.ts_s) / m.clock_hz;
+  if (policy == GainPolicy::Tuned) return tuned_gains(a, ts, loop_delay_s(m, p, jitter));
+  mc::host::PidGains g{};
+  g.kp = a.pid.kp;
+  g.ki = a.pid.ki;
+  g.kd = a.pid.kd;
+  g.tf = a.pid.tf_s;
+  g.ts = ts;
+  g.ff1 = a.pid.ff1;
+  g.ff2 = a.pid.ff2;
+  return g;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// The command: what the interpolator is asked to do, and the ideal path.
+struct Command {
+  bool set = false;  // a step: load the position at the start
+  int32_t set_pos[3] = {};
+  std::vector<uint32_t> words;   // segments to queue at the start
+  std::vector<PathPiece> ideal;  // metres, for the contour error
+};
+
+Command make_command(const MachineConfig& m, const Scenario& s) {
+  const AxisConfig &x = m.axes.at(0), &y = m.axes.at(1);
+  const double cpm = counts_per_m(x);
+  if (std::fabs(counts_per_m(y) - cpm) > 1e-9 * cpm)
+    throw InputError("counts per metre of axis y (" + m.source + ")", std::to_string(counts_per_m(y)),
+                     "the same as axis x's, " + std::to_string(cpm), "the XY scenarios need one scale");
+  Command c;
+  const mc::host::Vec3 origin{0, 0, 0};
+  const double feed = s.feed_m_s * cpm;
+  if (s.kind == ScenarioKind::Step) {
+    c.set = true;
+    c.set_pos[0] = int32_t(std::llround(s.size_m * cpm));
+    return c;
+  }
+  mc::host::PlannedSegment p;
+  if (s.kind == ScenarioKind::Line) {
+    const double a = s.angle_deg * M_PI / 180;
+    const mc::host::Vec3 to{std::llround(s.size_m * std::cos(a) * cpm),
+                            std::llround(s.size_m * std::sin(a) * cpm), 0};
+    p = mc::host::plan_line(origin, to, feed, m.clock_hz);
+    c.ideal.push_back(Segment{{0, 0}, {double(to[0]) / cpm, double(to[1]) / cpm}});
+  } else {
+    const int64_t r = std::llround(s.size_m * cpm);
+    p = mc::host::plan_arc(origin, origin, {-r, 0}, true, feed, seg::PLANE_XY, m.clock_hz);
+    c.ideal.push_back(Arc{{-double(r) / cpm, 0}, double(r) / cpm, 0, 2 * M_PI});
+  }
+  for (uint32_t w : seg::pack(p.seg)) c.words.push_back(w);
+  return c;
+}
+
+// The drive is the PWM pin itself rather than its average.
+bool switching(const DriveConfig& d) {
+  return d.kind == DriveConfig::Kind::Pwm && d.pwm_switching;
+}
+
+// ---------------------------------------------------------------------------
+// The machine: plants, the controller, the recorder. Advances in plant steps;
+// the SystemC processes decide when to stop and let the others in.
+class Machine {
+ public:
+  explicit Machine(const RunSpec& spec)
+      : s_(spec), k_(clocks_per_step(spec.machine)), cmd_(make_command(spec.machine, spec.scenario)) {
+    const MachineConfig& m = s_.machine;
+    if (m.axes.size() < 2)
+      throw InputError("axes (" + m.source + ")", std::to_string(m.axes.size()), "at least x and y");
+    for (int a = 0; a < kCoreAxes; ++a) {
+      plant_.emplace_back(m.axes[size_t(a)], m.plant_dt_s);
+      gains_[a] = gains_for(m, m.axes[size_t(a)], s_.platform, s_.policy, s_.jitter);
+    }
+    start_step_ = uint64_t(std::llround(1e-3 / m.plant_dt_s));  // the command starts at 1 ms
+    end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
+    record_every_ = std::max<uint64_t>(1, uint64_t(std::llround(s_.record_dt_s / m.plant_dt_s)));
+    if (s_.platform.host) {
+      for (int a = 0; a < kCoreAxes; ++a) {
+        HostLoopConfig hc;
+        hc.gains = gains_[a];
+        hc.period_s = s_.platform.ts_s;
+        hc.io_latency_s = m.host_io_latency_s;
+        // One program serves both axes: both see the same wake-ups.
+        host_.emplace_back(hc, JitterSampler(s_.jitter, s_.seed));
+        DriveConfig d = m.axes[size_t(a)].drive;
+        d.kind = DriveConfig::Kind::Dac;
+        d.dac_bits = m.host_dac_bits;
+        d.dac_range_v = m.host_dac_range_v;
+        dac_[a] = d;
+      }
+    } else {
+      core_ = s_.engine == Engine::Rtl ? make_rtl_core(s_.fst_path) : std::make_unique<TwinCore>();
+      configure_core();
+    }
+    res_.platform = s_.platform.name;
+    res_.scenario = s_.scenario.name;
+    res_.policy = policy_name(s_.policy);
+    res_.engine = s_.platform.host ? "host" : engine_name(s_.engine);
+    res_.gains = gains_[0];
+  }
+
+  uint64_t step_index() const { return step_; }
+  uint64_t end_step() const { return end_step_; }
+  double dt() const { return s_.machine.plant_dt_s; }
+  bool host() const { return s_.platform.host; }
+  // The plant step at or after which the PC next wakes.
+  uint64_t next_wake_step() const { return uint64_t(std::ceil(host_[0].next_wake_s() / dt() - 1e-9)); }
+  // The PC wakes: it reads the command and the encoders as they are now.
+  void host_wake() {
+    for (int a = 0; a < kCoreAxes; ++a) {
+      host_[size_t(a)].wake(double(cmd_now_[a]), double(plant_[size_t(a)].encoder_count()));
+      if (step_ >= start_step_) {
+        res_.sample_u[size_t(a)].push_back(int32_t(std::lround(host_[size_t(a)].last_output())));
+        if (a == 0) res_.sample_clock.push_back(step_ * k_);
+      }
+    }
+  }
+
+  void advance_to(uint64_t target) {
+    while (step_ < target) plant_step();
+  }
+
+  RunResult finish(double wall_s) {
+    res_.sim_s = double(end_step_ - start_step_) * dt();
+    res_.wall_s = wall_s;
+    for (int a = 0; a < kCoreAxes; ++a)
+      res_.follow[size_t(a)] = following_error(res_.t, res_.cmd_m[size_t(a)], res_.pos_m[size_t(a)]);
+    const Scenario& sc = s_.scenario;
+    if (sc.kind == ScenarioKind::Step) {
+      res_.step = mc::host::step_metrics(res_.t, res_.pos_m[0], 0, sc.size_m, res_.t.front());
+    } else {
+      std::vector<Point2> pts(res_.t.size());
+      for (size_t i = 0; i < pts.size(); ++i) pts[i] = {res_.pos_m[0][i], res_.pos_m[1][i]};
+      res_.contour = contour_error(pts, cmd_.ideal);
+    }
+    // Still far off the command at the end: oscillating, diverged, or slow.
+    const size_t n = res_.t.size(), from = n - std::max<size_t>(1, n / 10);
+    double worst = 0;
+    for (size_t i = from; i < n; ++i)
+      for (int a = 0; a < kCoreAxes; ++a)
+        worst = std::max(worst, std::fabs(res_.cmd_m[size_t(a)][i] - res_.pos_m[size_t(a)][i]));
+    res_.tracking = worst < 0.25 * sc.size_m;
+    return std::move(res_);
+  }
+
+ private:
+  // Reset, gains, Ts, enables: through the core's own ports, clock by clock.
+  void configure_core() {
+    CoreIn in;
+    in.rst = true;
+    for (int i = 0; i < 4; ++i) core_->cycle(in);
+    in.rst = false;
+    std::vector<std::pair<uint8_t, uint32_t>> w;
+    for (int a = 0; a < kCoreAxes; ++a) {
+      const mc::host::PidDesign d = mc::host::design(gains_[a]);
+      mc::host::CoreLimits lim;
+      lim.out_limit = uint32_t(std::lround(s_.machine.axes[size_t(a)].pid.out_limit));
+      const mc::PidParams p = mc::host::core_params(d, lim);
+      for (int r = 0; r < mc::pid_reg::NREGS_RAM; ++r) w.push_back({uint8_t(a << 4 | r), p.word[r]});
+      w.push_back({uint8_t(a << 4 | mc::pid_reg::CTRL), 1});
+    }
+    w.push_back({uint8_t(mc::pid_reg::GLOBAL_AXIS << 4 | mc::pid_reg::G_TS),
+                 ts_cycles(s_.machine, s_.platform.ts_s)});
+    for (const auto& [addr, data] : w) {
+      in.pid_we = true;
+      in.pid_waddr = addr;
+      in.pid_wdata = data;
+      // Taken in the clock whose outputs say the port is ready.
+      while (!core_->cycle(in).pid_wready) {
+      }
+    }
+    in.pid_we = false;
+    for (int a = 0; a < kCoreAxes; ++a) {
+      in.drv_allow[a] = true;
+      in.enc_filt[a] = 1;
+    }
+    in_ = in;
+  }
+
+  // Encoder pins: the counts the plant reached at the start of the step are
+  // shown one edge every other clock (the decoder's limit is about one per
+  // clock), more than half a step's worth carried to the next step.
+  void emit_plan() {
+    for (int a = 0; a < kCoreAxes; ++a) {
+      const int64_t target = plant_[size_t(a)].encoder_count();
+      const int64_t d = std::clamp<int64_t>(target - shown_[a], -int64_t(k_ / 2), int64_t(k_ / 2));
+      emit_from_[a] = shown_[a];
+      emit_n_[a] = d;
+      shown_[a] += d;
+    }
+  }
+  int64_t emitted(int a, uint32_t c) const {
+    const int64_t n = std::min<int64_t>(std::llabs(emit_n_[a]), int64_t(c / 2 + 1));
+    return emit_from_[a] + (emit_n_[a] < 0 ? -n : (emit_n_[a] > 0 ? n : 0));
+  }
+  // Clocks until the pins stop changing in this step.
+  uint32_t emit_settled_at() const {
+    uint32_t c = 0;
+    for (int a = 0; a < kCoreAxes; ++a)
+      if (emit_n_[a] != 0) c = std::max<uint32_t>(c, uint32_t(2 * (std::llabs(emit_n_[a]) - 1) + 1));
+    return c;
+  }
+
+  void plant_step() {
+    double volts[kCoreAxes];
+    if (host()) {
+      const double t = double(step_) * dt();
+      command_generator_step();
+      for (int a = 0; a < kCoreAxes; ++a)
+        volts[a] = drive_volts(dac_[a], int32_t(std::lround(host_[size_t(a)].output_at(t))));
+    } else {
+      fpga_step(volts);
+    }
+    for (int a = 0; a < kCoreAxes; ++a) plant_[size_t(a)].step(volts[a]);
+    ++step_;
+    if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
+  }
+
+  void start_command(CoreIn& in, uint32_t c) {
+    if (step_ != start_step_) return;
+    in.ip_set = cmd_.set && c == 0 ? 7 : 0;
+    for (int a = 0; a < 3; ++a) in.ip_set_pos[a] = cmd_.set_pos[a];
+    in.seg_wr = c < cmd_.words.size();
+    in.seg_wdata = in.seg_wr ? cmd_.words[c] : 0;
+  }
+  bool commanding(uint32_t c) const { return step_ == start_step_ && (c == 0 || c < cmd_.words.size()); }
+
+  void fpga_step(double* volts) {
+    emit_plan();
+    const uint32_t settle = emit_settled_at();
+    double sum[kCoreAxes] = {};
+    uint32_t c = 0;
+    while (c < k_) {
+      for (int a = 0; a < kCoreAxes; ++a) {
+        const QuadPins p = quadrature_pins(emitted(a, c), s_.machine.axes[size_t(a)].encoder_cpr);
+        in_.enc_a[a] = p.a;
+        in_.enc_b[a] = p.b;
+        in_.enc_z[a] = p.z;
+      }
+      start_command(in_, c);
+      if (c >= settle && !pending_ && !commanding(c)) {
+        const uint32_t n = k_ - c;
+        if (const auto sk = core_->try_skip(in_, n)) {
+          for (int a = 0; a < kCoreAxes; ++a) sum[a] += skipped_volts(a, sk->first, sk->pwm0, n);
+          res_.clocks_skipped += n;
+          break;
+        }
+      }
+      const CoreOut o = core_->cycle(in_);
+      ++res_.clocks_cycled;
+      for (int a = 0; a < kCoreAxes; ++a) {
+        sum[a] += clock_volts(a, o);
+        cmd_now_[a] = o.cmd[a];
+      }
+      if (pending_) {
+        pending_ = false;
+        if (step_ >= start_step_) {
+          res_.sample_clock.push_back(done_clock_);
+          for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.drv_cmd[a]);
+        }
+      }
+      if (o.done) {
+        pending_ = true;
+        done_clock_ = step_ * k_ + c;
+      }
+      ++c;
+    }
+    in_.ip_set = 0;
+    in_.seg_wr = false;
+    for (int a = 0; a < kCoreAxes; ++a) volts[a] = sum[a] / k_;
+  }
+
+  double clock_volts(int a, const CoreOut& o) const {
+    const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
+    if (!switching(d)) return drive_volts(d, o.drv_u[a]);
+    if (!o.drv_en[a] || !o.pwm[a]) return 0;
+    return o.dir[a] ? -d.supply_v : d.supply_v;
+  }
+  // n quiet clocks: the drive value holds; the PWM pin follows the counter.
+  double skipped_volts(int a, const CoreOut& o, uint32_t p0, uint32_t n) const {
+    const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
+    if (!switching(d)) return n * drive_volts(d, o.drv_u[a]);
+    if (!o.drv_en[a]) return 0;
+    const uint32_t duty = CoreTwin::duty(o.drv_u[a]), mask = (1u << CoreTwin::pwm_bits) - 1;
+    uint32_t high = o.pwm[a];
+    for (uint32_t k = 1; k < n; ++k) high += duty > ((p0 + k - 1) & mask);
+    return (o.dir[a] ? -d.supply_v : d.supply_v) * high;
+  }
+
+  // The PC's command: the same interpolator, run on its own, so both
+  // platforms follow the very same position command.
+  void command_generator_step() {
+    for (uint32_t c = 0; c < k_; ++c) {
+      mc::InterpIn in;
+      if (step_ == start_step_) {
+        in.set = cmd_.set && c == 0 ? 7 : 0;
+        for (int a = 0; a < 3; ++a) in.set_pos[a] = cmd_.set_pos[a];
+        in.wr = c < cmd_.words.size();
+        in.wdata = in.wr ? cmd_.words[c] : 0;
+      }
+      if (gen_.quiet(in)) {
+        gen_.skip(k_ - c);
+        break;
+      }
+      gen_.clock(in);
+    }
+    for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = gen_.pos(a);
+  }
+
+  void record() {
+    const double cpm = counts_per_m(s_.machine.axes[0]);
+    res_.t.push_back(double(step_ - start_step_) * dt());
+    for (int a = 0; a < kCoreAxes; ++a) {
+      res_.cmd_m[size_t(a)].push_back(double(cmd_now_[a]) / cpm);
+      res_.pos_m[size_t(a)].push_back(plant_[size_t(a)].position_m());
+    }
+  }
+
+  const RunSpec& s_;
+  const uint32_t k_;
+  Command cmd_;
+  std::vector<AxisPlant> plant_;
+  mc::host::PidGains gains_[kCoreAxes];
+  std::vector<HostLoop> host_;
+  DriveConfig dac_[kCoreAxes]{};
+  std::unique_ptr<CoreModel> core_;
+  mc::InterpCore<9> gen_;
+  CoreIn in_;
+  uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1;
+  int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
+  int32_t cmd_now_[kCoreAxes] = {};
+  bool pending_ = false;
+  uint64_t done_clock_ = 0;
+  RunResult res_;
+};
+
+// ---------------------------------------------------------------------------
+// The SystemC system model. The machine process owns the plant and the core
+// and runs ahead of the kernel by at most a quantum (temporal decoupling),
+// stopping exactly where another process needs the state: the PC's wake-ups.
+// The PC process runs the host loop at its own jittered times; the monitor
+// reports progress at its own rate.
+SC_MODULE(SystemModel) {
+  Machine& m;
+  const RunSpec& spec;
+  uint64_t quantum;
+  sc_core::sc_event wake_ev, woke_ev;
+
+  SC_HAS_PROCESS(SystemModel);
+  // SystemC's module naming takes the name by value.
+  SystemModel(sc_core::sc_module_name nm,  // NOLINT(performance-unnecessary-value-param)
+              Machine & machine, const RunSpec& s)
+      : sc_core::sc_module(nm), m(machine), spec(s) {
+    quantum = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 / m.dt())));
+    SC_THREAD(machine_proc);
+    if (m.host()) SC_THREAD(host_proc);
+    if (spec.progress) SC_THREAD(monitor_proc);
+  }
+
+  sc_core::sc_time at_step(uint64_t s) const {
+    return sc_core::sc_time(double(s) * m.dt(), sc_core::SC_SEC);
+  }
+
+  void machine_proc() {
+    while (m.step_index() < m.end_step()) {
+      uint64_t target = std::min(m.step_index() + quantum, m.end_step());
+      const bool wake = m.host() && m.next_wake_step() <= target;
+      if (wake) target = m.next_wake_step();
+      m.advance_to(target);
+      wait(at_step(target) - sc_core::sc_time_stamp());
+      if (wake) {
+        wake_ev.notify(sc_core::SC_ZERO_TIME);
+        wait(woke_ev);
+      }
+    }
+    sc_core::sc_stop();
+  }
+
+  void host_proc() {
+    for (;;) {
+      wait(wake_ev);
+      m.host_wake();
+      woke_ev.notify(sc_core::SC_ZERO_TIME);
+    }
+  }
+
+  void monitor_proc() {
+    const double total = double(m.end_step()) * m.dt();
+    for (;;) {
+      wait(sc_core::sc_time(total / 100, sc_core::SC_SEC));
+      spec.progress(std::min(1.0, sc_core::sc_time_stamp().to_seconds() / total));
+    }
+  }
+};
+
+// --- Serialization: a flat little-endian record, same machine both ends. ---
+struct Writer {
+  std::string b;
+  template <typename T>
+  void pod(const T& v) {
+    b.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void str(const std::string& s) {
+    pod(uint64_t(s.size()));
+    b += s;
+  }
+  template <typename T>
+  void vec(const std::vector<T>& v) {
+    pod(uint64_t(v.size()));
+    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  }
+};
+struct Reader {
+  const std::string& b;
+  size_t at = 0;
+  void need(size_t n) {
+    if (b.size() - at < n) throw std::runtime_error("co-simulation result truncated");
+  }
+  template <typename T>
+  void pod(T& v) {
+    need(sizeof v);
+    std::memcpy(&v, b.data() + at, sizeof v);
+    at += sizeof v;
+  }
+  void str(std::string& s) {
+    uint64_t n = 0;
+    pod(n);
+    need(n);
+    s.assign(b, at, n);
+    at += n;
+  }
+  template <typename T>
+  void vec(std::vector<T>& v) {
+    uint64_t n = 0;
+    pod(n);
+    need(n * sizeof(T));
+    v.resize(n);
+    std::memcpy(v.data(), b.data() + at, n * sizeof(T));
+    at += n * sizeof(T);
+  }
+};
+
+template <typename IO, typename R>
+void fields(IO& io, R& r) {
+  io.str(r.platform);
+  io.str(r.scenario);
+  io.str(r.policy);
+  io.str(r.engine);
+  io.pod(r.gains);
+  io.vec(r.t);
+  for (int a = 0; a < 2; ++a) {
+    io.vec(r.cmd_m[size_t(a)]);
+    io.vec(r.pos_m[size_t(a)]);
+    io.vec(r.sample_u[size_t(a)]);
+    io.pod(r.follow[size_t(a)]);
+  }
+  io.vec(r.sample_clock);
+  io.pod(r.contour);
+  io.pod(r.step);
+  io.pod(r.tracking);
+  io.pod(r.sim_s);
+  io.pod(r.wall_s);
+  io.pod(r.clocks_cycled);
+  io.pod(r.clocks_skipped);
+}
+
+void write_all(int fd, const std::string& s) {
+  size_t at = 0;
+  while (at < s.size()) {
+    const ssize_t n = ::write(fd, s.data() + at, s.size() - at);
+    if (n <= 0) _exit(3);
+    at += size_t(n);
+  }
+}
+
+}  // namespace
+
+std::string serialize(const RunResult& r) {
+  Writer w;
+  fields(w, r);
+  return std::move(w.b);
+}
+
+RunResult deserialize(const std::string& bytes) {
+  Reader rd{bytes};
+  RunResult r;
+  fields(rd, r);
+  return r;
+}
+
+RunResult run(const RunSpec& spec) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Machine machine(spec);
+  SystemModel model("system", machine, spec);
+  sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+  sc_core::sc_start();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return machine.finish(wall);
+}
+
+// The child writes 'P' + double for progress, then 'R' + size + result, or
+// 'E' + size + message; the parent reads until the pipe closes.
+Child::Child(const RunSpec& spec) : name_(spec.platform.name + "/" + spec.scenario.name) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("pipe failed: " + std::string(std::strerror(errno)));
+  pid_ = ::fork();
+  if (pid_ < 0) throw std::runtime_error("fork failed: " + std::string(std::strerror(errno)));
+  if (pid_ == 0) {
+    ::close(fds[0]);
+    RunSpec s = spec;
+    s.progress = [fd = fds[1]](double f) {
+      std::string m(1, 'P');
+      m.append(reinterpret_cast<const char*>(&f), sizeof f);
+      write_all(fd, m);
+    };
+    const auto message = [](char kind, const std::string& body) {
+      std::string m(1, kind);
+      const uint64_t n = body.size();
+      m.append(reinterpret_cast<const char*>(&n), sizeof n);
+      return m + body;
+    };
+    std::string out;
+    try {
+      out = message('R', serialize(run(s)));
+    } catch (const std::exception& e) {
+      out = message('E', e.what());
+    }
+    write_all(fds[1], out);
+    ::close(fds[1]);
+    _exit(0);
+  }
+  ::close(fds[1]);
+  fd_ = fds[0];
+}
+
+Child::~Child() {
+  if (fd_ >= 0) ::close(fd_);
+  if (pid_ > 0) {
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+  }
+}
+
+bool Child::pump() {
+  char chunk[65536];
+  const ssize_t n = ::read(fd_, chunk, sizeof chunk);
+  if (n < 0 && errno == EINTR) return true;
+  if (n <= 0) return false;
+  buf_.append(chunk, size_t(n));
+  while (!buf_.empty() && buf_[0] == 'P' && buf_.size() >= 1 + sizeof(double)) {
+    std::memcpy(&progress_, buf_.data() + 1, sizeof progress_);
+    buf_.erase(0, 1 + sizeof progress_);
+  }
+  return true;
+}
+
+RunResult Child::result() {
+  ::close(fd_);
+  fd_ = -1;
+  int status = 0;
+  ::waitpid(pid_, &status, 0);
+  pid_ = -1;
+  if (buf_.size() >= 1 + sizeof(uint64_t) && (buf_[0] == 'R' || buf_[0] == 'E')) {
+    uint64_t n;
+    std::memcpy(&n, buf_.data() + 1, sizeof n);
+    const std::string body = buf_.substr(1 + sizeof n);
+    if (body.size() == n) {
+      if (buf_[0] == 'R') return deserialize(body);
+      throw std::runtime_error(name_ + ": " + body);
+    }
+  }
+  throw std::runtime_error("co-simulation of " + name_ + " ended without a result (status " +
+                           std::to_string(status) + ")");
+}
+
+RunResult run_isolated(const RunSpec& spec) {
+  Child c(spec);
+  while (c.pump())
+    if (spec.progress) spec.progress(c.progress());
+  return c.result();
+}
+
+}  // namespace mc::sim

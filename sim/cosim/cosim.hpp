@@ -1,0 +1,145 @@
+// The closed-loop co-simulation: an XY table of two DC-motor axes
+// (sim/dc_motor.hpp) under one of two controllers,
+// - the FPGA: rtl/motion_core.v clock by clock at the core clock, Verilated
+//   (Engine::Rtl) or its hls twin (Engine::Twin), with the encoder pins it
+//   would see and the drive it puts out;
+// - the PC: the same PID in double precision, woken every 10 ms with the
+//   wake-up jitter of a real Linux machine (sim/jitter.hpp), its position
+//   read and its output written through a DAQ with an I/O latency and a
+//   12-bit DAC (sim/host_loop.hpp);
+// tracking the same command: the interpolator's output for a step, a line
+// or a circle. A SystemC model runs the parts as processes at their own
+// rates (docs/decisions.md says how and why); run() does one scenario.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "host/control/metrics.hpp"
+#include "host/control/pid_design.hpp"
+#include "host/control/step_metrics.hpp"
+#include "host/machine/machine_config.hpp"
+#include "sim/plant/jitter.hpp"
+
+namespace mc::sim {
+
+// The tracking metrics are the host's (the board captures use them too).
+using mc::host::Arc;
+using mc::host::contour_error;
+using mc::host::ErrorStats;
+using mc::host::following_error;
+using mc::host::PathPiece;
+using mc::host::Point2;
+using mc::host::Segment;
+// The machine description every run is built from.
+using mc::machine::axis_model;
+using mc::machine::AxisConfig;
+using mc::machine::AxisModel;
+using mc::machine::MachineConfig;
+using mc::machine::tuned_gains;
+
+enum class Engine { Rtl, Twin };
+const char* engine_name(Engine e);
+
+struct Platform {
+  std::string name;   // "host-10ms", "fpga-100us", ...
+  bool host = false;  // the PC loop instead of the FPGA core
+  double ts_s = 0;    // sample period (the FPGA's is a whole number of clocks)
+};
+// The benchmark's platforms: host-10ms, fpga-10ms, fpga-1ms, fpga-100us,
+// fpga-10us and fpga-min (the shortest Ts the two-axis core runs).
+std::vector<Platform> bench_platforms(const MachineConfig& m);
+// The shortest sample period of the two-axis core, s.
+double fpga_min_ts(const MachineConfig& m);
+
+enum class ScenarioKind { Step, Line, Circle };
+struct Scenario {
+  std::string name;
+  ScenarioKind kind = ScenarioKind::Step;
+  double size_m = 0;      // step size, line length or circle radius
+  double angle_deg = 0;   // line direction from +x
+  double feed_m_s = 0;    // path speed (lines, circle)
+  double duration_s = 0;  // simulated time after the command starts
+  std::string describe() const;
+};
+// step (x, 1 mm), line-45 and line-30 (20 mm), circle (R 5 mm), feeds as
+// stated by describe(); quick: shorter versions for a smoke run.
+std::vector<Scenario> bench_scenarios(bool quick);
+Scenario find_scenario(const std::string& name, bool quick = false);
+Platform find_platform(const MachineConfig& m, const std::string& name);
+
+// "same": the machine's continuous design at every Ts (the paper's method).
+// "tuned": the rule of tuned_gains() for each platform's own delay.
+enum class GainPolicy { Same, Tuned };
+const char* policy_name(GainPolicy p);
+
+// The delay a loop adds at its sample period: half a sample (hold) plus
+// the computation or I/O latency; for the PC also the mean wake-up lateness.
+double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHistogram& jitter);
+mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p,
+                             GainPolicy policy, const JitterHistogram& jitter);
+struct RunSpec {
+  MachineConfig machine;
+  Platform platform;
+  Scenario scenario;
+  GainPolicy policy = GainPolicy::Same;
+  Engine engine = Engine::Rtl;
+  uint64_t seed = 1;
+  std::string fst_path;                  // waveform of the core (RTL engine only)
+  double record_dt_s = 1e-4;             // trace interval
+  JitterHistogram jitter;                // the PC's wake-up lateness
+  std::function<void(double)> progress;  // fraction done, now and then
+};
+
+struct RunResult {
+  std::string platform, scenario, policy, engine;
+  mc::host::PidGains gains;  // axis x's
+  std::vector<double> t;     // s from the command start
+  std::array<std::vector<double>, 2> cmd_m, pos_m;
+  // Every controller output: the FPGA's per PID sample (clock of its done),
+  // the PC's per wake.
+  std::vector<uint64_t> sample_clock;
+  std::array<std::vector<int32_t>, 2> sample_u;
+  std::array<ErrorStats, 2> follow;  // m
+  ErrorStats contour;                // m, paths only
+  mc::host::StepMetrics step{};      // step only, axis x
+  bool tracking = true;              // within a quarter of the move of the command at the end
+  double sim_s = 0, wall_s = 0;
+  uint64_t clocks_cycled = 0, clocks_skipped = 0;
+};
+
+// One scenario. SystemC elaborates a design once per process: call run() at
+// most once in a process, or use run_isolated().
+RunResult run(const RunSpec& spec);
+// run() in a forked child process; progress is relayed; an error in the
+// child comes back as std::runtime_error with its message.
+RunResult run_isolated(const RunSpec& spec);
+
+// One run in a forked child, for callers that run several at once: pump()
+// reads what the child sent (blocking once; false at the end), fd() is for
+// poll(), result() waits for the child and returns or throws.
+class Child {
+ public:
+  explicit Child(const RunSpec& spec);
+  ~Child();
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  int fd() const { return fd_; }
+  bool pump();
+  double progress() const { return progress_; }
+  RunResult result();
+
+ private:
+  std::string name_;
+  int pid_ = -1, fd_ = -1;
+  std::string buf_;
+  double progress_ = 0;
+};
+
+std::string serialize(const RunResult& r);
+RunResult deserialize(const std::string& bytes);
+
+}  // namespace mc::sim

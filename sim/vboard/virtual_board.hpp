@@ -1,0 +1,118 @@
+// The virtual board: the Verilated iCEBreaker top (rtl/motioncore_icebreaker.v,
+// three axes and the handwheel) clocked at the machine's clock, one DC-motor
+// plant per configured axis on its encoder and H-bridge pins, and the UART
+// pins bridged bit by bit (sim/uart_model.hpp) to a byte stream. serve()
+// carries that stream over a pseudo-terminal, so the unchanged host tools
+// speak the board's own protocol to it (`motionctl sim serve`).
+//
+//   VirtualBoard b(default_machine());
+//   b.send(bytes);                  // the host's bytes, onto the RX pin
+//   b.run(clocks, out);             // whole plant steps; the board's TX bytes appended to out
+//
+// Pins: each plant step (MachineConfig::plant_dt_s, a whole number of clocks)
+// the plant sees the mean of its PWM/DIR/EN pins over the step as terminal
+// volts (+-supply while EN and PWM are high), and its encoder count is shown
+// on the A/B/Z pins one edge every other clock, as the co-simulation does.
+// An axis the config does not describe keeps its encoder still; the limit,
+// e-stop and handwheel inputs stay inactive.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/machine/machine_config.hpp"
+
+namespace mc::sim {
+
+using mc::machine::MachineConfig;
+
+constexpr int kBoardAxes = 3;
+// The longest watchdog period the board can hold (WDOG is 24 bits): after
+// this long without a frame the drives are off for sure.
+constexpr uint64_t kMaxWatchdogClocks = uint64_t(1) << 24;
+
+class VirtualBoard {
+ public:
+  // Powers up as the FPGA does, every register and RAM zero; seed != 0:
+  // Verilator's random power-up state instead (seeded), to flush out reset bugs.
+  explicit VirtualBoard(const MachineConfig& m, uint32_t seed = 0);
+  ~VirtualBoard();
+  VirtualBoard(const VirtualBoard&) = delete;
+  VirtualBoard& operator=(const VirtualBoard&) = delete;
+
+  // Queues host bytes on the board's RX line (1 Mbaud 8N1 at the board's BAUD).
+  void send(const uint8_t* p, size_t n);
+  // Bytes queued on RX that have not left the host's line yet.
+  size_t rx_backlog() const;
+  // Runs at least `clocks` clocks, in whole plant steps; appends the bytes the
+  // board sent on TX to out.
+  void run(uint64_t clocks, std::vector<uint8_t>& out);
+
+  uint64_t cycles() const;
+  double clock_hz() const;
+  double board_seconds() const { return double(cycles()) / clock_hz(); }
+  uint32_t clocks_per_step() const;
+  // Clocks since the last UART activity on either line.
+  uint64_t link_quiet_clocks() const;
+  // Nothing observable can change by itself: the link has been quiet for
+  // longer than any watchdog period (so the drives are off), every drive
+  // pin is off and every plant stands still.
+  bool dormant() const;
+
+  // For status lines: the plants' table positions, m, and whether each drive is on.
+  double position_m(int axis) const;
+  bool drive_enabled(int axis) const;
+  int configured_axes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// A pseudo-terminal whose slave side the host tools open as a serial port.
+// The master stays with the virtual board; the board keeps a slave
+// descriptor open itself, so that a host closing its side is not a hang-up
+// for the board (bytes sent while no host listens wait in the terminal's
+// buffer, and a host discards them when it opens the port).
+class Pty {
+ public:
+  Pty();  // throws std::runtime_error with the failing call
+  ~Pty();
+  Pty(const Pty&) = delete;
+  Pty& operator=(const Pty&) = delete;
+  const std::string& path() const { return path_; }
+  int master_fd() const { return master_; }
+
+ private:
+  int master_ = -1, slave_ = -1;
+  std::string path_;
+};
+
+struct ServeStatus {
+  double board_s = 0;        // the board's time
+  double wall_s = 0;         // since serve() started
+  double rt_factor = 0;      // board seconds per wall second over the last report interval
+  bool model_bound = false;  // slower than real time (running flat out)
+  bool dormant = false;      // waiting for the host with the clock stopped
+  uint64_t bytes_in = 0, bytes_out = 0, bytes_dropped = 0;
+};
+
+struct ServeOptions {
+  bool paced = true;          // never ahead of the wall clock; false: flat out (--fast)
+  double idle_exit_s = 0;     // return after this long without a host byte (0: never)
+  double status_every_s = 5;  // wall seconds between status reports
+  std::function<void(const ServeStatus&)> status;
+};
+
+// Runs the board on the pseudo-terminal until `stop` becomes true or the
+// idle limit passes. Host bytes go onto RX as they come; TX bytes go out as
+// the board sends them (dropped, and counted, when no host reads and the
+// terminal's buffer is full). A dormant board (VirtualBoard::dormant) waits
+// for the next host byte with its clock stopped instead of burning a core.
+ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const std::atomic<bool>& stop);
+
+}  // namespace mc::sim
