@@ -276,6 +276,20 @@ class MotionCore {
   int32_t sample(int a, SampleField f) const { return bank_[r_.pb][a][f]; }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }
+  // Of the n edges skip(n) would do, after how many axis a's PWM pin is
+  // high: the counter runs on while the drive value holds, so the count
+  // follows from the duty and the counter's phase (a host that integrates
+  // the drive over a skipped stretch needs it; not RTL).
+  uint32_t pwm_high_in(int a, uint32_t n) const {
+    constexpr uint32_t P = pwm_mask + 1;
+    const uint32_t d = duty(r_.drv_u[a]), p0 = r_.pcnt, rem = n % P;
+    // The counter takes the values p0, p0 + 1, ... (mod P): whole periods,
+    // then rem values from p0, wrapping at most once (d < P).
+    uint32_t high = n / P * d;
+    if (p0 < d) high += (p0 + rem < d ? p0 + rem : d) - p0;
+    if (p0 + rem > P) high += (p0 + rem - P < d ? p0 + rem - P : d);
+    return high;
+  }
 
   const Pid& pid() const { return pid_; }
   const InterpCore<FIFO_AW>& interp() const { return ip_; }

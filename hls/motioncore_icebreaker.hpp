@@ -58,6 +58,9 @@ class MotioncoreIcebreaker {
   bool en(int a) const { return a < NAXES && u_board.drv_en_o(a); }
   bool ledr_n() const { return !u_board.led_fault_o(); }
   bool ledg_n() const { return !u_board.led_ok_o(); }
+  // After how many of the next n edges axis a's PWM pin is high, when
+  // advance(p, n) does them (the drive holds; EN and DIR keep their level).
+  uint32_t pwm_high_in(int a, uint32_t n) const { return a < NAXES ? u_board.u_core.pwm_high_in(a, n) : 0; }
 
   // One rising clock edge with these pin levels.
   void step(const IcebreakerPins& p) {

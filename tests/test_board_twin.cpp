@@ -921,8 +921,17 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
       ASSERT_LE(k, limit);
       if (k > 0) {
         const uint32_t n = rng() % 4 ? k : 1 + uint32_t(rng() % k);  // the whole stretch, or part of it
+        uint32_t high[3];
+        for (int a = 0; a < 3; ++a) high[a] = fast.pwm_high_in(a, n);
         fast.advance(p, n);
-        for (uint32_t i = 0; i < n; ++i) ref.step(p);
+        uint32_t stepped_high[3] = {};
+        for (uint32_t i = 0; i < n; ++i) {
+          ref.step(p);
+          for (int a = 0; a < 3; ++a) stepped_high[a] += ref.pwm(a);
+        }
+        for (int a = 0; a < 3; ++a)
+          ASSERT_EQ(high[a], stepped_high[a])
+              << "PWM high clocks of axis " << a << " over " << n << " clocks";
         clocks += n;
         skipped += n;
         ++skips;
