@@ -243,7 +243,10 @@ class MotionCore {
     ii.abort = in.ip_abort;
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
-    if (!ip_.quiet(ii) || !pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
+    ii.hold = in.ip_hold;
+    // The interpolator idle, or running with no iteration due in the n clocks.
+    if (!(ip_.quiet(ii) || ip_.run_quiet(ii) >= n) || !pid_.quiet(pid_in(in, nullptr, nullptr), n))
+      return false;
     for (int a = 0; a < NAXES; ++a) {
       if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
       if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
@@ -252,7 +255,9 @@ class MotionCore {
   }
   void skip(uint32_t n) {
     pid_.skip(n);
-    if (ip_still_ < 2) {
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      ip_.skip_run(n);
+    } else if (ip_still_ < 2) {
       ip_.skip(n);
       ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
     }
@@ -266,6 +271,8 @@ class MotionCore {
   // next tick, drive update or done.
   uint32_t quiet_limit() const {
     uint32_t l = pid_.quiet_limit();
+    // A running interpolator: up to its next iteration (with no input).
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) l = std::min(l, ip_.run_quiet(InterpIn{}));
     const int s = pid_.sweep_clock();
     if (s != 0)
       for (int a = 0; a < NAXES; ++a)

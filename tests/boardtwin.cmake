@@ -5,3 +5,7 @@
 
 mc_gtest(test_board_twin rtl test_board_twin.cpp)
 target_link_libraries(test_board_twin PRIVATE mc_hls mc_motion vboard)
+
+# The running interpolator's fast-forward against clocking every clock.
+mc_gtest(test_board_twin_ff unit test_board_twin_ff.cpp)
+target_link_libraries(test_board_twin_ff PRIVATE mc_hls mc_motion)
