@@ -17,43 +17,13 @@
 #include "host/link/board_state.hpp"
 #include "host/motion/board_run.hpp"
 #include "host/motion/interp_plan.hpp"
+#include "sim/vboard/board_stream.hpp"
 #include "sim/vboard/virtual_board.hpp"
 
 namespace mc::test {
 namespace {
 
 namespace br = board::reg;
-
-// The board as a byte stream in board time: a read runs the board (whole
-// plant steps) until it sends or the timeout passes on its own clock, so a
-// session is the same on any engine, however fast it runs. Every TX byte is
-// logged with its clock, and every axis position after each run.
-class BoardStream final : public host::ByteStream {
- public:
-  explicit BoardStream(sim::VirtualBoard& b) : b_(b) {}
-  void write(const uint8_t* p, size_t n) override { b_.send(p, n); }
-  size_t read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) override {
-    const uint64_t end = b_.cycles() + uint64_t(double(timeout.count()) * 1e-3 * b_.clock_hz());
-    while (pending_.empty() && b_.cycles() < end) {
-      const size_t before = pending_.size();
-      b_.run(b_.clocks_per_step(), pending_);
-      for (size_t i = before; i < pending_.size(); ++i) tx.push_back({b_.cycles(), pending_[i]});
-      for (int a = 0; a < 3; ++a) pos.push_back(b_.position_m(a));
-    }
-    const size_t k = std::min(n, pending_.size());
-    std::copy(pending_.begin(), pending_.begin() + long(k), p);
-    pending_.erase(pending_.begin(), pending_.begin() + long(k));
-    return k;
-  }
-  std::string name() const override { return "virtual board"; }
-
-  std::vector<std::pair<uint64_t, uint8_t>> tx;
-  std::vector<double> pos;
-
- private:
-  sim::VirtualBoard& b_;
-  std::vector<uint8_t> pending_;
-};
 
 struct Session {
   std::vector<std::pair<uint64_t, uint8_t>> tx;
@@ -68,7 +38,7 @@ struct Session {
 Session session(sim::BoardEngine e) {
   const machine::MachineConfig m = machine::default_machine();
   sim::VirtualBoard board(m, 0, e);
-  BoardStream s(board);
+  sim::BoardStream s(board, true);
   host::BoardLink link(s);
   const auto t0 = std::chrono::steady_clock::now();
   link.connect();

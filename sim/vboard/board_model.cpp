@@ -29,6 +29,13 @@ class TwinBoard final : public BoardModel {
   }
   bool tx() const override { return b_.tx(); }
   bool en(int axis) const override { return b_.en(axis); }
+  uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) override { return b_.idle_clocks(p, limit); }
+  int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
+    if (!b_.en(a)) return 0;
+    const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
+    return b_.dir(a) ? -high : high;
+  }
+  void advance(const IcebreakerPins& p, uint32_t n) override { b_.advance(p, n); }
 
  private:
   MotioncoreIcebreaker<kBoardAxes> b_;

@@ -30,6 +30,13 @@ class BoardModel {
   // The output pins after the last edge.
   virtual bool tx() const = 0;
   virtual bool en(int axis) const = 0;
+  // The twin's fast-forward over many plant steps (the RTL: none): how many
+  // of the next clocks (up to limit) with the pins held change nothing but
+  // counters; the drive of axis a over the clocks [from, from + n) of such a
+  // stretch (as run() counts it); advance(p, n) does n of them at once.
+  virtual uint32_t idle_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/) { return 0; }
+  virtual int32_t idle_drive(int /*axis*/, uint32_t /*from*/, uint32_t /*n*/) const { return 0; }
+  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/) {}
   // Clocks stepped one by one so far (the rest were skipped).
   uint64_t stepped() const { return stepped_; }
 

@@ -148,6 +148,37 @@ struct VirtualBoard::Impl {
     if (active) last_activity = cycles;
   }
 
+  // The twin's event loop: from a step boundary, the whole plant steps in
+  // which the board only counts (the host line idle, no frame being worked
+  // on, no PID tick or drive update, no interpolator iteration, no encoder
+  // edge to show) go by with the board advanced over them at once. The
+  // plants still take every step, with the drive the clock-by-clock path
+  // would count (the PWM pins follow their counters), so positions and
+  // bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs). It stops
+  // after the step in which an encoder count changes.
+  bool jump(uint64_t steps) {
+    if (!tx.idle() || rx.busy() || rx.has_byte()) return false;
+    for (int a = 0; a < naxes; ++a)
+      if (slot[a].plant->encoder_count() != slot[a].shown) return false;
+    pins.rx = tx.pin();
+    const uint64_t most = board->idle_clocks(pins, uint32_t(std::min<uint64_t>(steps * k, 1u << 30))) / k;
+    if (most == 0) return false;
+    uint64_t j = 0;
+    bool edge = false;
+    while (j < most && !edge) {
+      for (int a = 0; a < naxes; ++a) {
+        Slot& s = slot[a];
+        s.plant->step(s.supply_v * double(board->idle_drive(a, uint32_t(j * k), k)) / double(k));
+        edge = edge || s.plant->encoder_count() != s.shown;
+      }
+      ++j;
+    }
+    board->advance(pins, uint32_t(j * k));
+    rx.clock_n(board->tx(), uint32_t(j * k));
+    cycles += j * k;
+    return true;
+  }
+
   MachineConfig m;
   uint32_t k;
   int cpb;
@@ -171,9 +202,13 @@ void VirtualBoard::send(const uint8_t* p, size_t n) {
 size_t VirtualBoard::rx_backlog() const {
   return impl_->tx.queued();
 }
-void VirtualBoard::run(uint64_t clocks, std::vector<uint8_t>& out) {
+void VirtualBoard::run(uint64_t clocks, std::vector<uint8_t>& out, bool until_output) {
   const uint64_t end = impl_->cycles + clocks;
-  while (impl_->cycles < end) impl_->plant_step(out);
+  const size_t before = out.size();
+  while (impl_->cycles < end && !(until_output && out.size() > before)) {
+    const uint64_t steps = (end - impl_->cycles + impl_->k - 1) / impl_->k;
+    if (!impl_->jump(steps)) impl_->plant_step(out);
+  }
 }
 uint64_t VirtualBoard::cycles() const {
   return impl_->cycles;

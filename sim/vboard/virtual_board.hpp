@@ -57,8 +57,9 @@ class VirtualBoard {
   // Bytes queued on RX that have not left the host's line yet.
   size_t rx_backlog() const;
   // Runs at least `clocks` clocks, in whole plant steps; appends the bytes the
-  // board sent on TX to out.
-  void run(uint64_t clocks, std::vector<uint8_t>& out);
+  // board sent on TX to out. until_output: stop after the plant step in
+  // which the first of them came.
+  void run(uint64_t clocks, std::vector<uint8_t>& out, bool until_output = false);
 
   uint64_t cycles() const;
   // Of cycles(), the clocks the engine stepped one by one (the RTL: all).
