@@ -442,11 +442,12 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
       rule += "---|";
       row += " " + um(r->contour.rms) + " µm |";
     }
-    double twin_sim = 0, twin_wall = 0;
+    double twin_sim = 0, twin_wall = 0, twin_cpu = 0;
     for (const RunResult& r : br.runs)
       if (r.engine != "host") {
         twin_sim += r.sim_s;
         twin_wall += r.wall_s;
+        twin_cpu += r.cpu_s;
       }
     size_t same = 0;
     for (const RtlCheck& c : br.rtl_checks) same += c.same_outputs;
@@ -456,7 +457,8 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
        << row << "\n\n"
        << "The full benchmark took " << fmt(br.wall_s, 1) << " s with " << o.jobs << " jobs; its FPGA runs "
        << "went at " << fmt(twin_wall > 0 ? twin_sim / twin_wall : 0, 1) << "x real time on the "
-       << engine_name(o.engine) << " engine";
+       << engine_name(o.engine) << " engine (" << fmt(twin_cpu > 0 ? twin_sim / twin_cpu : 0, 1)
+       << "x on CPU time)";
     if (!br.rtl_checks.empty())
       md << ", and " << same << " of " << br.rtl_checks.size()
          << " runs repeated on the Verilated RTL gave the same controller outputs, sample for sample";

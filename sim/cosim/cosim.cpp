@@ -449,9 +449,17 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) volts[a] = sum[a] / k_;
   }
 
-  double clock_volts(int a, const CoreOut& o) const {
+  double clock_volts(int a, const CoreOut& o) {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
-    if (!switching(d)) return drive_volts(d, o.drv_u[a]);
+    if (!switching(d)) {
+      // The drive value changes once a sample: convert it then.
+      if (o.drv_u[a] != volts_u_[a] || !volts_set_[a]) {
+        volts_u_[a] = o.drv_u[a];
+        volts_v_[a] = drive_volts(d, o.drv_u[a]);
+        volts_set_[a] = true;
+      }
+      return volts_v_[a];
+    }
     if (!o.drv_en[a] || !o.pwm[a]) return 0;
     return o.dir[a] ? -d.supply_v : d.supply_v;
   }
@@ -510,6 +518,9 @@ class Machine {
   int32_t cmd_now_[kCoreAxes] = {};
   bool pending_ = false;
   uint64_t done_clock_ = 0;
+  int16_t volts_u_[kCoreAxes] = {};  // clock_volts' last drive value and its volts
+  double volts_v_[kCoreAxes] = {};
+  bool volts_set_[kCoreAxes] = {};
   RunResult res_;
 };
 

@@ -41,6 +41,25 @@ bool same_but_encoders(CoreIn a, const CoreIn& b) {
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
+// The outputs the co-simulation reads (CoreModel::cycle), and only those:
+// reading every port each clock costs a fifth of the model's own time.
+template <typename Model>
+CoreOut read_used(const Model& d) {
+  CoreOut o;
+  o.pid_wready = d.pid_wready;
+  o.tick = d.tick;
+  o.done = d.done;
+  for (int a = 0; a < kCoreAxes; ++a) {
+    o.pwm[a] = (d.pwm_o >> a) & 1;
+    o.dir[a] = (d.dir_o >> a) & 1;
+    o.drv_en[a] = (d.drv_en_o >> a) & 1;
+    o.drv_u[a] = int16_t(vl::get_bits(d.drv_u, 16 * a, 16));
+    o.drv_cmd[a] = int16_t(vl::get_bits(d.drv_cmd, 16 * a, 16));
+    o.cmd[a] = int32_t(vl::get_bits(d.cmd, 32 * a, 32));
+  }
+  return o;
+}
+
 // Model: Vmotion_core2 (fast) or Vmotion_core2_trace (with an FST open).
 template <typename Model>
 class RtlCore final : public CoreModel {
@@ -75,7 +94,7 @@ class RtlCore final : public CoreModel {
     std::memcpy(&last_, &in, sizeof last_);
     dut_->clk = 0;
     dut_->eval();
-    const CoreOut o = read_outputs<kCoreAxes>(*dut_);
+    const CoreOut o = read_used(*dut_);
     if (fst_) fst_->dump(2 * clock_);
     dut_->clk = 1;
     dut_->eval();
