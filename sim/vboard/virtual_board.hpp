@@ -127,7 +127,7 @@ struct ServeOptions {
   double status_every_s = 5;  // wall seconds between status reports
   // Free-running: after answering a host request, wait this long (wall) for
   // the next one before running on (0: never wait).
-  double host_wait_s = 2e-3;
+  double host_wait_s = 20e-3;
   std::function<void(const ServeStatus&)> status;
 };
 
