@@ -47,7 +47,10 @@ class Server {
     if (::pipe(fds) != 0) throw std::runtime_error("pipe");
     // MC_VBOARD_ENGINE=rtl (tests/vboard.cmake sets it for a second run of
     // the system tests): the same tests on the Verilated board.
-    std::vector<std::string> args = {"sim", "serve", "--fast", "--no-register"};
+    // Free-running, but waiting for the CLI's next request after each answer:
+    // on a loaded machine a CLI's reaction time would otherwise become tens
+    // of milliseconds of board time.
+    std::vector<std::string> args = {"sim", "serve", "--fast", "--host-wait", "20ms", "--no-register"};
     if (const char* e = std::getenv("MC_VBOARD_ENGINE")) args.insert(args.end(), {"--engine", e});
     pid_ = spawn(args, fds[1]);
     if (pid_ <= 0) throw std::runtime_error("no server");

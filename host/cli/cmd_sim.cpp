@@ -33,6 +33,7 @@ struct ServeOptions {
   std::string engine = "twin";
   std::string idle_exit = "0";
   std::string status_every = "5";
+  std::string host_wait = "0";
   bool no_register = false;
   std::string config;  // overrides the global --config
 };
@@ -80,6 +81,9 @@ void serve(const ServeOptions& o) {
 
   mc::sim::ServeOptions so;
   so.paced = paced;
+  so.host_wait_s = o.host_wait == "0" ? 0.0 : parse_duration(o.host_wait, "--host-wait");
+  if (so.host_wait_s < 0 || so.host_wait_s > 1)
+    throw InputError("--host-wait", o.host_wait, "a time from 0 to 1 s");
   so.idle_exit_s = idle_min * 60;
   so.status_every_s = every;
   so.status = [](const mc::sim::ServeStatus& s) {
@@ -139,6 +143,10 @@ void add_sim_command(CLI::App& app) {
   srv->add_option("--speed", o->speed, "1: paced to the wall clock (default); max: free-running")
       ->type_name("1|max");
   srv->add_flag("--fast", o->fast, "The same as --speed max");
+  srv->add_option("--host-wait", o->host_wait,
+                  "Free-running: after answering a request, wait up to this long for the host's next one "
+                  "(default 0: never)")
+      ->type_name("TIME");
   srv->add_option("--engine", o->engine, "twin: the board's C++ twin (default); rtl: the Verilated board")
       ->type_name("twin|rtl");
   srv->add_option("--idle-exit", o->idle_exit, "Exit after this many minutes without host bytes (0: never)")

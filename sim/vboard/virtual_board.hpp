@@ -126,8 +126,9 @@ struct ServeOptions {
   double idle_exit_s = 0;     // return after this long without a host byte (0: never)
   double status_every_s = 5;  // wall seconds between status reports
   // Free-running: after answering a host request, wait this long (wall) for
-  // the next one before running on (0: never wait).
-  double host_wait_s = 20e-3;
+  // the next one before running on, so that the host's reaction time does
+  // not turn into board time (0: never wait, the fastest).
+  double host_wait_s = 0;
   std::function<void(const ServeStatus&)> status;
 };
 
