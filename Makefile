@@ -5,7 +5,7 @@ BUILD_SAN  ?= build-san
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog formal
+.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog formal readme-bench
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -46,6 +46,10 @@ format:
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN)
+
+# Copy the benchmark table of the last full `make bench` into README.md.
+readme-bench:
+	scripts/bench_readme.sh $(BUILD)/bench/report.md README.md
 
 # Regenerate rtl/board_regs.vh and the register table of docs/protocol.md
 # from hls/board_regs.hpp (test_board_regs fails when they are stale).

@@ -60,6 +60,7 @@
 //   13 go: the position moves.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "interp_seg.hpp"
@@ -109,6 +110,7 @@ class InterpCore {
     for (int32_t& p : pos_) p = 0;
     underrun_ = ovf_ = false;
     seg_cnt_ = 0;
+    calm_ = calm_seen_ = tick_strobe_ = false;
   }
 
   // One clock edge.
@@ -200,6 +202,8 @@ class InterpCore {
     }
     ra_ = ra_n;
     rb_ = rb_n;
+    ra_addr_ = uint8_t(next.a);
+    rb_addr_ = uint8_t(next.b);
 
     if (ld) {
       if (ridx == seg::W_HDR) {
@@ -307,6 +311,63 @@ class InterpCore {
       pend_ = 0;
       go_ = false;
     }
+    // A whole running tick that changed nothing but the feed phase: the
+    // next ones will not either until an iteration fires (run_quiet).
+    // An iteration fired or moving, too, ends the calm until a whole tick
+    // has shown it back.
+    const bool strobe = in.wr || in.abort || in.hold || in.clr || in.set || fire || go_;
+    if (st_ != ST_RUN || strobe) {
+      calm_ = false;
+      tick_strobe_ = st_ == ST_RUN;
+    }
+    if (st_ == ST_RUN && sq_ == 0) {
+      uint32_t key[kCalmWords];
+      calm_key(key);
+      calm_ = !tick_strobe_ && pend_ == 0 && !go_ && calm_seen_ && equal(key, calm_last_);
+      for (int i = 0; i < kCalmWords; ++i) calm_last_[i] = key[i];
+      calm_seen_ = true;
+      tick_strobe_ = false;
+    } else if (st_ != ST_RUN) {
+      calm_seen_ = false;
+    }
+  }
+
+  // Running fast-forward. After a whole tick that changed nothing but the
+  // feed phase, with no iteration pending: each further tick that fires no
+  // iteration only adds inc to the phase (the phase being the one thing such
+  // a tick reads that changes). run_quiet(in) says how many clocks from
+  // here, with these inputs, fire nothing (0: not so); skip_run(n) does
+  // n <= that many, the rest of this tick and the tail clock by clock, the
+  // whole ticks between by arithmetic.
+  uint32_t run_quiet(const InterpIn& in) const {
+    // At step 1 this tick's iteration is still to be decided.
+    if (!calm_ || st_ != ST_RUN || sq_ == 1 || pend_ != 0 || go_ || in.wr || in.abort || in.hold || in.clr ||
+        in.set)
+      return 0;
+    const uint32_t head = uint32_t(TICK - sq_) % TICK;
+    constexpr uint64_t kAcc = uint64_t(1) << 44;  // the phase accumulator: V12[11:0] : V11
+    const uint64_t acc = uint64_t(mem_[12] & 0xFFFu) << 32 | mem_[11];
+    const uint64_t inc = uint64_t(mem_[3] & 0xFFFFu) << 32 | mem_[2];
+    if (inc >= kAcc) return 0;
+    // Ticks j = 1..m fire nothing while acc + j inc < 2^44; the clock after
+    // them (step 0 of the tick that fires) adds to the phase only.
+    const uint64_t m = inc == 0 ? uint64_t(1) << 26 : (kAcc - 1 - acc) / inc;
+    return head + uint32_t(std::min<uint64_t>(m, uint64_t(1) << 26) * TICK + 1);
+  }
+  void skip_run(uint32_t n) {
+    for (; n > 0 && sq_ != 0; --n) clock(InterpIn{});
+    const uint32_t m = n / TICK;
+    if (m > 0) {
+      const uint64_t acc = uint64_t(mem_[12] & 0xFFFu) << 32 | mem_[11];
+      const uint64_t inc = uint64_t(mem_[3] & 0xFFFFu) << 32 | mem_[2];
+      const uint64_t now = acc + uint64_t(m) * inc;
+      mem_[11] = uint32_t(now);
+      mem_[12] = (mem_[12] & 0xFFFF0000u) | uint32_t(now >> 32);
+      // The read ports hold what step 0 reads, read after the last write.
+      ra_ = mem_[ra_addr_];
+      rb_ = mem_[rb_addr_];
+    }
+    for (uint32_t i = 0; i < n % TICK; ++i) clock(InterpIn{});
   }
 
   // Fast-forward: idle with less than a segment queued and no input, the
@@ -399,9 +460,60 @@ class InterpCore {
     }
   }
 
+  // Everything but the feed phase and the read ports, for run_quiet: one
+  // word per register (the segment's words, flags, position, FIFO level).
+  static constexpr int kCalmWords = 16 + 32;
+  void calm_key(uint32_t* k) const {
+    for (int i = 0; i < 16; ++i) k[i] = (i == 11 || i == 12) ? 0 : mem_[i];
+    const uint32_t r[32] = {uint32_t(mem_[12] >> 16),
+                            uint32_t(st_),
+                            uint32_t(sq_),
+                            uint32_t(ic_),
+                            uint32_t(widx_),
+                            uint32_t(ridx_),
+                            uint32_t(rv_),
+                            uint32_t(wi_),
+                            uint32_t(drop_),
+                            uint32_t(pend_),
+                            uint32_t(go_) | uint32_t(fen_) << 1 | uint32_t(carry_) << 2,
+                            uint32_t(type_),
+                            uint32_t(plane_),
+                            uint32_t(nq_),
+                            uint32_t(neg_),
+                            uint32_t(last_) | uint32_t(ccw_) << 1,
+                            uint32_t(nz_) | uint32_t(xz_) << 1 | uint32_t(xn_) << 2 | uint32_t(yz_) << 3 |
+                                uint32_t(yn_) << 4 | uint32_t(xeq_) << 5 | uint32_t(yeq_) << 6,
+                            uint32_t(ncross_),
+                            uint32_t(lmv_),
+                            uint32_t(movex_) | uint32_t(neg_m_) << 1 | uint32_t(outw_) << 2,
+                            uint32_t(pos_[0]),
+                            uint32_t(pos_[1]),
+                            uint32_t(pos_[2]),
+                            uint32_t(underrun_) | uint32_t(ovf_) << 1,
+                            uint32_t(seg_cnt_),
+                            uint32_t(fifo_.count()),
+                            fifo_.rdata(),
+                            uint32_t(ra_addr_),
+                            uint32_t(rb_addr_),
+                            0,
+                            0,
+                            0};
+    for (int i = 0; i < 32; ++i) k[16 + i] = r[i];
+  }
+  static bool equal(const uint32_t* a, const uint32_t* b) {
+    for (int i = 0; i < kCalmWords; ++i)
+      if (a[i] != b[i]) return false;
+    return true;
+  }
+
   SegFifo<FIFO_AW> fifo_;
   uint32_t mem_[16] = {};
   uint32_t ra_ = 0, rb_ = 0;
+  uint8_t ra_addr_ = 1, rb_addr_ = 1;  // where ra_ and rb_ were read
+  // run_quiet: the last tick was calm; the key at the start of the last
+  // tick; a strobe came during this tick.
+  bool calm_ = false, calm_seen_ = false, tick_strobe_ = false;
+  uint32_t calm_last_[kCalmWords] = {};
   int st_ = ST_IDLE;
   int sq_ = 0;  // PREP step or RUN tick step
   int ic_ = 0;  // init steps done after reset

@@ -72,7 +72,9 @@ struct MotionOut {
 enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2, SMP_OUT = 3, SMP_FOLLOW = 4 };
 constexpr int SMP_FIELDS = 8;  // per axis: the address has three field bits
 
-template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8>
+// IDX_RAM: the decoders' index latches in block RAM (rtl/quad_decoder.v), as
+// the board builds them.
+template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8, bool IDX_RAM = false>
 class MotionCore {
   static_assert(NAXES >= 1 && NAXES <= 3, "motion_core: NAXES must be 1..3");
   static_assert(PWM_BITS >= 1 && PWM_BITS <= 15, "motion_core: PWM_BITS must be 1..15");
@@ -81,6 +83,7 @@ class MotionCore {
   using In = MotionIn<NAXES>;
   using Out = MotionOut<NAXES>;
   using Pid = PidCoreClocked<NAXES>;
+  using Decoder = QuadDecoder<FILT_W, 16, 32, 16, IDX_RAM>;
   static constexpr int latency = Pid::latency;
   // The sweep clock (Pid::sweep_clock) in which pid_core streams axis a's
   // output word, which the drive takes at that clock's edge: slot a + 1,
@@ -126,7 +129,10 @@ class MotionCore {
   }
 
   void clock(const In& in) {
-    Regs n = r_;  // nonblocking: every right-hand side reads r_
+    // Nonblocking: every right-hand side reads r, this clock's registers;
+    // the next values go straight into r_ (n).
+    const Regs r = r_;
+    Regs& n = r_;
     int32_t cmd[NAXES], fb[NAXES];
     for (int a = 0; a < NAXES; ++a) {
       cmd[a] = ip_.pos(a);
@@ -145,16 +151,16 @@ class MotionCore {
     n.smp_rdata = read_bank(in.smp_raddr);
     if (!in.rst && done) {
       for (int a = 0; a < NAXES; ++a) {
-        int32_t* w = n.bank[!r_.pb][a];
-        w[SMP_CMD] = r_.in_cmd[a];
-        w[SMP_FB] = r_.in_fb[a];
+        int32_t* w = bank_[!r.pb][a];
+        w[SMP_CMD] = r.in_cmd[a];
+        w[SMP_FB] = r.in_fb[a];
         w[SMP_ERR] = pid_.core().err(a);
         w[SMP_OUT] = int32_t(uint32_t(uint16_t(pid_.core().u(a))) | uint32_t(pid_.core().sat(a)) << 16 |
                              uint32_t(pid_.enabled(a)) << 17);
-        const int64_t follow = int64_t(r_.in_cmd[a]) - r_.in_fb[a];
+        const int64_t follow = int64_t(r.in_cmd[a]) - r.in_fb[a];
         w[SMP_FOLLOW] = int32_t(std::clamp<int64_t>(follow, INT32_MIN, INT32_MAX));
       }
-      n.pb = !r_.pb;
+      n.pb = !r.pb;
     }
     for (int a = 0; a < NAXES; ++a) {
       if (in.rst) {
@@ -170,15 +176,15 @@ class MotionCore {
     }
 
     // Drive stage.
-    n.pcnt = in.rst ? 0 : (r_.pcnt + 1) & pwm_mask;
+    n.pcnt = in.rst ? 0 : (r.pcnt + 1) & pwm_mask;
     for (int a = 0; a < NAXES; ++a) {
-      const int16_t u = u_sel(in, a);
+      const int16_t u = u_sel(r, in, a);
       if (in.rst) {
         n.drv_u[a] = 0;
         n.pwm[a] = n.dir[a] = n.drv_en[a] = false;
       } else {
         n.drv_u[a] = u;
-        n.pwm[a] = duty(u) > r_.pcnt;
+        n.pwm[a] = duty(u) > r.pcnt;
         n.dir[a] = u < 0;
         n.drv_en[a] = drv_en(in, a);
       }
@@ -195,58 +201,122 @@ class MotionCore {
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
     for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
-    if (in.rst)
+    // An idle interpolator stands still after two quiet clocks
+    // (InterpCore::quiet); from then on its clock is skipped.
+    if (in.rst) {
       ip_.reset();
-    else
+      ip_still_ = 0;
+    } else if (!ip_.quiet(ii)) {
       ip_.clock(ii);
+      ip_still_ = 0;
+    } else if (ip_still_ < 2) {
+      ip_.clock(ii);
+      ++ip_still_;
+    }
 
-    for (int a = 0; a < NAXES; ++a) dec_[a].step(quad_in(in, a, tick));
-    r_ = n;
+    // A settled decoder only ages its last edge: skip(1) is that clock, for
+    // much less work than step() (the clocks with pin activity step).
+    for (int a = 0; a < NAXES; ++a) {
+      const QuadIn qi = quad_in(in, a, tick);
+      if (dec_[a].quiet(qi))
+        dec_[a].skip(1);
+      else
+        dec_[a].step(qi);
+    }
   }
 
   // Fast-forward for long simulations: true when n clocks with these inputs
-  // would change nothing but counters (no tick or sweep due, decoders
-  // settled, interpolator idle, drive value unchanged); skip(in, n) then does
-  // them at once (the inputs held are those quiet() was given). The PWM pin
-  // ends as the last of those clocks leaves it.
+  // would change nothing but counters (no tick, drive update or done due,
+  // decoders settled, interpolator idle, drive value unchanged); skip(in, n)
+  // then does them at once (the inputs held are those quiet() was given).
+  // The PWM pin ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
+    if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
+      const int s = pid_.sweep_clock();
+      for (int a = 0; a < NAXES; ++a)
+        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
+    }
     if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     InterpIn ii;
     ii.wr = in.seg_wr;
     ii.abort = in.ip_abort;
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
-    if (!ip_.quiet(ii) || !pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
+    ii.hold = in.ip_hold;
+    // The interpolator idle, or running with no iteration due in the n clocks.
+    if (!(ip_.quiet(ii) || ip_.run_quiet(ii) >= n) || !pid_.quiet(pid_in(in, nullptr, nullptr), n))
+      return false;
     for (int a = 0; a < NAXES; ++a) {
       if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
-      if (r_.drv_u[a] != u_sel(in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
+      if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
     }
     return true;
   }
   void skip(uint32_t n) {
     pid_.skip(n);
-    ip_.skip(n);
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      ip_.skip_run(n);
+    } else if (ip_still_ < 2) {
+      ip_.skip(n);
+      ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
+    }
     for (int a = 0; a < NAXES; ++a) {
       dec_[a].skip(n);
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
   }
+  // The most clocks the sample timer and the sweep allow quiet(): up to the
+  // next tick, drive update or done.
+  uint32_t quiet_limit() const {
+    uint32_t l = pid_.quiet_limit();
+    // A running interpolator: up to its next iteration (with no input).
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) l = std::min(l, ip_.run_quiet(InterpIn{}));
+    const int s = pid_.sweep_clock();
+    if (s != 0)
+      for (int a = 0; a < NAXES; ++a)
+        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < l) l = uint32_t(drv_clock(a) - s);
+    return l;
+  }
   // A word of the published sample (what smp_raddr would read).
-  int32_t sample(int a, SampleField f) const { return r_.bank[r_.pb][a][f]; }
+  int32_t sample(int a, SampleField f) const { return bank_[r_.pb][a][f]; }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }
+  // Of the n edges skip(n) would do, after how many axis a's PWM pin is
+  // high: the counter runs on while the drive value holds, so the count
+  // follows from the duty and the counter's phase (a host that integrates
+  // the drive over a skipped stretch needs it; not RTL).
+  uint32_t pwm_high_in(int a, uint32_t n) const {
+    constexpr uint32_t P = pwm_mask + 1;
+    const uint32_t d = duty(r_.drv_u[a]), p0 = r_.pcnt, rem = n % P;
+    // The counter takes the values p0, p0 + 1, ... (mod P): whole periods,
+    // then rem values from p0, wrapping at most once (d < P).
+    uint32_t high = n / P * d;
+    if (p0 < d) high += (p0 + rem < d ? p0 + rem : d) - p0;
+    if (p0 + rem > P) high += (p0 + rem - P < d ? p0 + rem - P : d);
+    return high;
+  }
 
   const Pid& pid() const { return pid_; }
   const InterpCore<FIFO_AW>& interp() const { return ip_; }
-  const QuadDecoder<FILT_W, 16, 32>& decoder(int a) const { return dec_[a]; }
+  const Decoder& decoder(int a) const { return dec_[a]; }
+  // Single outputs of the current clock, for users that need a few of them
+  // every clock (outputs() gathers all).
+  bool pwm(int a) const { return r_.pwm[a]; }
+  bool dir(int a) const { return r_.dir[a]; }
+  bool drv_en(int a) const { return r_.drv_en[a]; }
+  int16_t drv_cmd(int a) const { return r_.drv_cmd[a]; }
+  uint32_t smp_rdata() const { return r_.smp_rdata; }
 
  private:
   static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
 
-  uint32_t read_bank(uint8_t raddr) const { return uint32_t(r_.bank[r_.pb][raddr >> 3 & 3][raddr & 7]); }
-  int16_t u_sel(const In& in, int a) const { return !in.drv_allow[a] ? int16_t(0) : r_.drv_cmd[a]; }
+  uint32_t read_bank(uint8_t raddr) const { return uint32_t(bank_[r_.pb][raddr >> 3 & 3][raddr & 7]); }
+  struct Regs;
+  static int16_t u_sel(const Regs& r, const In& in, int a) {
+    return !in.drv_allow[a] ? int16_t(0) : r.drv_cmd[a];
+  }
   bool drv_en(const In& in, int a) const { return in.drv_allow[a] && (pid_.enabled(a) || in.drv_ovr[a]); }
   static typename Pid::In pid_in(const In& in, const int32_t* cmd, const int32_t* fb) {
     typename Pid::In pi;
@@ -280,7 +350,6 @@ class MotionCore {
 
   struct Regs {
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
-    int32_t bank[2][4][SMP_FIELDS] = {};  // [bank][axis][field], as the RTL's 64 words
     bool pb = false;
     uint32_t smp_rdata = 0;
     int16_t drv_cmd[NAXES] = {};
@@ -289,9 +358,11 @@ class MotionCore {
     int16_t drv_u[NAXES] = {};
     bool pwm[NAXES] = {}, dir[NAXES] = {}, drv_en[NAXES] = {};
   };
+  int32_t bank_[2][4][SMP_FIELDS] = {};  // the sample RAM: [bank][axis][field], as the RTL's 64 words
   Pid pid_;
   InterpCore<FIFO_AW> ip_;
-  QuadDecoder<FILT_W, 16, 32> dec_[NAXES];
+  uint8_t ip_still_ = 0;  // quiet interpolator clocks in a row, up to 2
+  Decoder dec_[NAXES];
   Regs r_;
 };
 

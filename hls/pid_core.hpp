@@ -245,12 +245,24 @@ class PidCoreClocked {
   int sweep_clock() const { return run_ ? latency - left_ : done_ ? latency : 0; }
   const PidCore<NAXES>& core() const { return core_; }
 
-  // Fast-forward: between sweeps, with no port activity and no tick due in
-  // the next n clocks, a clock only counts the timer down.
+  // Fast-forward: with no port activity, no tick due in the next n clocks
+  // and, inside a sweep, its last clock (done) not among them, a clock only
+  // counts the timers down (the sample's arithmetic was done at the tick).
   bool quiet(const In& in, uint32_t n) const {
-    return !in.rst && !in.we && !in.re && !clr_ && !run_ && !tick_ && !done_ && !rvalid_ && tcnt_ > n;
+    return !in.rst && !in.we && !in.re && !clr_ && !tick_ && !done_ && !rvalid_ && n < quiet_limit() + 1;
   }
-  void skip(uint32_t n) { tcnt_ -= n; }
+  void skip(uint32_t n) {
+    tcnt_ -= n;
+    if (run_) left_ -= int(n);
+  }
+  // The most clocks the timers allow quiet() (0 if the next is the tick or
+  // done).
+  uint32_t quiet_limit() const {
+    const uint32_t t = tcnt_ - 1;
+    return run_ && uint32_t(left_ - 1) < t ? uint32_t(left_ - 1) : t;
+  }
+  // The sample timer: the tick comes in the clock in which it is 1.
+  uint32_t timer() const { return tcnt_; }
 
   void clock(const In& in) {
     if (in.rst) {

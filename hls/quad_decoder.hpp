@@ -80,60 +80,63 @@ class QuadDecoder {
 
   // One rising clock edge with these inputs. Channels: bit 0 = A, 1 = B, 2 = Z.
   QuadOut step(const QuadIn& in) {
-    Regs n = r_;  // nonblocking: every right-hand side reads r_
+    // Nonblocking: every right-hand side reads r, this clock's registers;
+    // the next values go straight into r_ (n).
+    const Regs r = r_;
+    Regs& n = r_;
     const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
     const uint32_t len = in.filt_len & ones(FILT_W);
 
     // Synchronizers.
     n.meta = pins;
-    n.sync = r_.meta;
+    n.sync = r.meta;
 
     // Glitch filters.
-    const uint32_t differ = r_.sync ^ r_.filt;
+    const uint32_t differ = r.sync ^ r.filt;
     uint32_t pass = 0, drop = 0;
     for (int c = 0; c < 3; ++c) {
-      const uint32_t seen = r_.cnt[c] + 1;
+      const uint32_t seen = r.cnt[c] + 1;
       const bool d = (differ >> c) & 1;
       if (d && seen >= len) pass |= 1u << c;
-      if (c < 2 && !d && r_.cnt[c] != 0) drop |= 1u << c;
+      if (c < 2 && !d && r.cnt[c] != 0) drop |= 1u << c;
     }
     for (int c = 0; c < 3; ++c) {
       const bool d = (differ >> c) & 1, p = (pass >> c) & 1;
-      n.cnt[c] = (in.rst || !d || p) ? 0 : (r_.cnt[c] + 1) & ones(FILT_W);
+      n.cnt[c] = (in.rst || !d || p) ? 0 : (r.cnt[c] + 1) & ones(FILT_W);
     }
-    n.filt = in.rst ? r_.sync : r_.filt ^ pass;
+    n.filt = in.rst ? r.sync : r.filt ^ pass;
 
-    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
+    const uint32_t sync_other = ((r.sync & 1) << 1) | ((r.sync >> 1) & 1);
     for (int c = 0; c < 2; ++c) {
       const bool d = (differ >> c) & 1, p = (pass >> c) & 1;
       if (in.rst || !d || p) n.oth = (n.oth & ~(1u << c)) | (sync_other & (1u << c));
     }
-    const bool straddle = (drop & (sync_other ^ r_.oth)) != 0;
+    const bool straddle = (drop & (sync_other ^ r.oth)) != 0;
 
     // 4x decode.
     // The decision is registered once before the counters (RTL: the
     // filter's compare and the count would otherwise be one path).
     const bool a_mv = pass & 1, b_mv = (pass >> 1) & 1;
     n.step = !in.rst && a_mv != b_mv;
-    n.fwd = !in.rst && fwd_now(a_mv);
+    n.fwd = !in.rst && fwd_now(r, a_mv);
     n.qerr = !in.rst && ((a_mv && b_mv) || straddle);
-    n.z_rise = !in.rst && ((pass >> 2) & 1) && ((r_.sync >> 2) & 1);
-    const bool step = r_.step;
-    const bool up = r_.fwd != in.dir_inv;
-    const bool qerr = r_.qerr;
+    n.z_rise = !in.rst && ((pass >> 2) & 1) && ((r.sync >> 2) & 1);
+    const bool step = r.step;
+    const bool up = r.fwd != in.dir_inv;
+    const bool qerr = r.qerr;
 
     const bool dn = step && !up;
-    const uint32_t pos_cnt = r_.pos_o + (dn ? ~0u : uint32_t(step));
-    const bool idx_hit = r_.idx_armed_o && r_.z_rise;
+    const uint32_t pos_cnt = r.pos_o + (dn ? ~0u : uint32_t(step));
+    const bool idx_hit = r.idx_armed_o && r.z_rise;
 
     // Reset, then load, then the index clear, then counting.
     n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
 
     if constexpr (IDX_RAM) {
-      n.idx_pos_o = r_.idx_mem[r_.idx_w];
+      n.idx_pos_o = r.idx_mem[r.idx_w];
       if (idx_hit && !in.rst) {
-        n.idx_mem[!r_.idx_w] = pos_cnt;
-        n.idx_w = !r_.idx_w;
+        n.idx_mem[!r.idx_w] = pos_cnt;
+        n.idx_w = !r.idx_w;
       }
     } else if (in.rst) {
       n.idx_pos_o = 0;
@@ -159,23 +162,23 @@ class QuadDecoder {
       n.err_o = false;
       n.err_cnt_o = 0;
     } else {
-      n.err_o = (r_.err_o && !in.err_clr) || qerr;
+      n.err_o = (r.err_o && !in.err_clr) || qerr;
       if (in.err_clr)
         n.err_cnt_o = qerr ? 1 : 0;
       else
-        n.err_cnt_o = r_.err_cnt_o + ((qerr && r_.err_cnt_o != ones(ERR_W)) ? 1 : 0);
+        n.err_cnt_o = r.err_cnt_o + ((qerr && r.err_cnt_o != ones(ERR_W)) ? 1 : 0);
     }
 
     // Per sample: the accumulator saturates (holds) at the VEL_W extremes.
     const int32_t vel_d = dn ? -1 : int32_t(step);
-    const int64_t vel_sum = int64_t(r_.vel_acc) + vel_d;
+    const int64_t vel_sum = int64_t(r.vel_acc) + vel_d;
     const bool vel_ovf = sat(vel_sum, VEL_W) != vel_sum;
     if (in.rst) {
       n.vel_acc = 0;
       n.vel_o = 0;
     } else if (in.sample) {
       n.vel_acc = vel_d;
-      n.vel_o = r_.vel_acc;
+      n.vel_o = r.vel_acc;
     } else if (!vel_ovf) {
       n.vel_acc = int32_t(vel_sum);
     }
@@ -184,11 +187,10 @@ class QuadDecoder {
       n.age = ones(AGE_W);
       n.age_o = ones(AGE_W);
     } else {
-      n.age = step ? 0 : r_.age + (r_.age != ones(AGE_W) ? 1 : 0);
-      if (in.sample) n.age_o = r_.age;
+      n.age = step ? 0 : r.age + (r.age != ones(AGE_W) ? 1 : 0);
+      if (in.sample) n.age_o = r.age;
     }
 
-    r_ = n;
     return out();
   }
 
@@ -204,10 +206,18 @@ class QuadDecoder {
            (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   void skip(uint32_t n) {
-    r_.fwd = fwd_now(false);  // what every quiet clock registers
+    r_.fwd = fwd_now(r_, false);  // what every quiet clock registers
     const uint64_t age = uint64_t(r_.age) + n;
     r_.age = age > ones(AGE_W) ? ones(AGE_W) : uint32_t(age);
   }
+
+  // Single outputs, for users that need a few every clock.
+  int32_t pos() const { return int32_t(r_.pos_o); }
+  int32_t idx_pos() const { return int32_t(r_.idx_pos_o); }
+  bool idx_armed() const { return r_.idx_armed_o; }
+  bool idx_seen() const { return r_.idx_seen_o; }
+  bool err() const { return r_.err_o; }
+  uint32_t err_cnt() const { return r_.err_cnt_o; }
 
   QuadOut out() const {
     QuadOut o;
@@ -228,8 +238,9 @@ class QuadDecoder {
  private:
   // The RTL's registers, same names, in the RTL's order.
   // Direction of this clock's A or B move (A leads B: forward).
-  bool fwd_now(bool a_mv) const {
-    return a_mv ? ((r_.sync ^ (r_.filt >> 1)) & 1) != 0 : (((r_.sync >> 1) ^ r_.filt) & 1) == 0;
+  struct Regs;
+  static bool fwd_now(const Regs& r, bool a_mv) {
+    return a_mv ? ((r.sync ^ (r.filt >> 1)) & 1) != 0 : (((r.sync >> 1) ^ r.filt) & 1) == 0;
   }
 
   struct Regs {

@@ -20,3 +20,15 @@ mc_gtest(test_cli_run system test_cli_run.cpp)
 target_link_libraries(test_cli_run PRIVATE nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_run PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_cli_run motionctl)
+
+# The virtual board on the twin against the same on the Verilated board.
+mc_gtest(test_vboard system test_vboard.cpp)
+target_link_libraries(test_vboard PRIVATE mc_motion mc_vboard)
+
+# The same CLI tests with `sim serve --engine rtl` (tests/vboard_server.hpp
+# reads MC_VBOARD_ENGINE): the commands behave the same on the Verilated
+# board as on the twin.
+foreach(t test_cli_board test_cli_step)
+  gtest_discover_tests(${t} TEST_PREFIX "Rtl." PROPERTIES LABELS system ENVIRONMENT MC_VBOARD_ENGINE=rtl
+    DISCOVERY_TIMEOUT 60)
+endforeach()

@@ -45,7 +45,14 @@ class Server {
   Server() {
     int fds[2];
     if (::pipe(fds) != 0) throw std::runtime_error("pipe");
-    pid_ = spawn({"sim", "serve", "--fast", "--no-register"}, fds[1]);
+    // MC_VBOARD_ENGINE=rtl (tests/vboard.cmake sets it for a second run of
+    // the system tests): the same tests on the Verilated board.
+    // Free-running, but waiting for the CLI's next request after each answer:
+    // on a loaded machine a CLI's reaction time would otherwise become tens
+    // of milliseconds of board time.
+    std::vector<std::string> args = {"sim", "serve", "--fast", "--host-wait", "20ms", "--no-register"};
+    if (const char* e = std::getenv("MC_VBOARD_ENGINE")) args.insert(args.end(), {"--engine", e});
+    pid_ = spawn(args, fds[1]);
     if (pid_ <= 0) throw std::runtime_error("no server");
     ::close(fds[1]);
     char c;

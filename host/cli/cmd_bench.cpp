@@ -4,6 +4,7 @@
 // report.md, results.csv and plots, and prints the report.
 #include <unistd.h>
 #include <CLI/CLI.hpp>
+#include <chrono>
 
 #include <cmath>
 #include <cstdio>
@@ -20,13 +21,14 @@
 #include "host/base/errors.hpp"
 #include "host/cli/commands.hpp"
 #include "sim/cosim/bench.hpp"
+#include "sim/vboard/board_stream.hpp"
 
 namespace mc::host::cli {
 namespace {
 
 struct BenchCli {
-  std::string out = "build/bench", config, jitter, engine = "rtl", policy = "both";
-  bool quick = false, json = false, no_plots = false;
+  std::string out = "build/bench", config, jitter, engine = "twin", policy = "both";
+  bool quick = false, json = false, no_plots = false, no_rtl_check = false, no_vboard_speed = false;
   int jobs = 0;
   uint64_t seed = 1;
   std::vector<std::string> platforms, scenarios;
@@ -67,6 +69,30 @@ std::optional<mc::sim::GainPolicy> parse_policy(const std::string& p, bool both)
   throw InputError("--policy", "'" + p + "'", both ? "same, tuned or both" : "same or tuned");
 }
 
+// The virtual board's speed on both engines (three axes holding, X and Y
+// moving), for the report's speed table.
+void add_vboard_speeds(const mc::sim::BenchOptions& o, mc::sim::BenchResult& r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // The board has three axes: a two-axis machine gets a third like its last.
+  mc::machine::MachineConfig m = o.machine;
+  while (m.axes.size() < 3) {
+    m.axes.push_back(m.axes.back());
+    m.axes.back().name = "xyz"[m.axes.size() - 1];
+  }
+  for (const mc::sim::BoardEngine e : {mc::sim::BoardEngine::Twin, mc::sim::BoardEngine::Rtl}) {
+    // The RTL runs at a fraction of real time: a shorter stretch.
+    const double board_s = (e == mc::sim::BoardEngine::Twin ? 1.0 : 0.05) * (o.quick ? 0.1 : 1.0);
+    for (const char* w : {"hold", "move"}) {
+      std::fprintf(stderr, "bench: virtual board, %s, %s engine\n", w, mc::sim::board_engine_name(e));
+      const mc::sim::VBoardSpeed v = mc::sim::measure_vboard_speed(m, e, w, board_s);
+      r.other_speeds.push_back({"virtual board, " + std::to_string(v.axes) + " axes, " +
+                                    (v.workload == "hold" ? "holding" : "X and Y moving"),
+                                mc::sim::board_engine_name(e), v.board_s, v.wall_s, v.cpu_s});
+    }
+  }
+  r.wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 void bench_command(const BenchCli& c) {
   mc::sim::BenchOptions o;
   o.machine = mc::machine::machine_or_default(c.config);
@@ -81,8 +107,10 @@ void bench_command(const BenchCli& c) {
   o.platforms = c.platforms;
   o.scenarios = c.scenarios;
   o.plots = !c.no_plots;
+  o.rtl_check = !c.no_rtl_check;
   Progress progress;
-  const mc::sim::BenchResult r = mc::sim::run_bench(o, std::ref(progress));
+  mc::sim::BenchResult r = mc::sim::run_bench(o, std::ref(progress));
+  if (!c.no_vboard_speed) add_vboard_speeds(o, r);
   const std::vector<std::string> files = mc::sim::write_bench(o, r);
   if (c.json) {
     nlohmann::json j = nlohmann::json::array();
@@ -215,8 +243,11 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--out", c->out, "Output directory (report.md, results.csv, plots/, data/)")
       ->capture_default_str();
   cmd->add_flag("--quick", c->quick, "Short scenarios: a smoke run, not for comparison");
-  cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
+  cmd->add_option("--engine", c->engine, "FPGA model: twin (hls/ C++) or rtl (Verilated)")
       ->capture_default_str();
+  cmd->add_flag("--no-rtl-check", c->no_rtl_check,
+                "With the twin engine, do not rerun a subset on the Verilated RTL to compare");
+  cmd->add_flag("--no-vboard-speed", c->no_vboard_speed, "Do not measure the virtual board's speed");
   cmd->add_option("--policy", c->policy, "Gain policy: same, tuned or both")->capture_default_str();
   cmd->add_option("--platform", c->platforms,
                   "Only these platforms (host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us, fpga-min)");

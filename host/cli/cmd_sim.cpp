@@ -29,11 +29,21 @@ extern "C" void on_stop_signal(int) {
 
 struct ServeOptions {
   bool fast = false;
+  std::string speed = "1";
+  std::string engine = "twin";
   std::string idle_exit = "0";
   std::string status_every = "5";
+  std::string host_wait = "0";
   bool no_register = false;
   std::string config;  // overrides the global --config
 };
+
+// --speed: 1 (paced to the wall clock) or max (free-running); true: paced.
+bool parse_speed(const std::string& s) {
+  if (s == "1") return true;
+  if (s == "max") return false;
+  throw InputError("--speed", "'" + s + "'", "1 (paced to the wall clock) or max (free-running)");
+}
 
 void install_handlers() {
   struct sigaction sa {};
@@ -50,8 +60,10 @@ void serve(const ServeOptions& o) {
   const double every = parse_duration(o.status_every, "--status-every");
   if (idle_min < 0) throw InputError("--idle-exit", o.idle_exit, "minutes >= 0 (0: never)");
   if (!o.config.empty()) global_options().config = o.config;
+  const bool paced = !o.fast && parse_speed(o.speed);
+  const mc::sim::BoardEngine engine = mc::sim::parse_board_engine(o.engine, "--engine");
   const mc::machine::MachineConfig m = machine();
-  mc::sim::VirtualBoard board(m);
+  mc::sim::VirtualBoard board(m, 0, engine);
   mc::sim::Pty pty;
   SimServer me{pty.path(), long(::getpid()), m.source == "built-in default" ? "" : global_options().config};
   if (!me.config.empty() && me.config[0] != '/') {
@@ -63,11 +75,15 @@ void serve(const ServeOptions& o) {
   // The one line tools read: the PTY path.
   std::cout << pty.path() << std::endl;
   std::cerr << "motionctl sim: virtual board (" << m.source << ", " << board.configured_axes()
-            << " plant axes) on " << pty.path() << (o.fast ? ", unpaced" : ", paced to the wall clock")
+            << " plant axes, " << mc::sim::board_engine_name(engine) << " engine) on " << pty.path()
+            << (paced ? ", paced to the wall clock" : ", free-running")
             << (registered ? ", registered for --sim" : "") << "; Ctrl-C stops it" << std::endl;
 
   mc::sim::ServeOptions so;
-  so.paced = !o.fast;
+  so.paced = paced;
+  so.host_wait_s = o.host_wait == "0" ? 0.0 : parse_duration(o.host_wait, "--host-wait");
+  if (so.host_wait_s < 0 || so.host_wait_s > 1)
+    throw InputError("--host-wait", o.host_wait, "a time from 0 to 1 s");
   so.idle_exit_s = idle_min * 60;
   so.status_every_s = every;
   so.status = [](const mc::sim::ServeStatus& s) {
@@ -91,6 +107,7 @@ void serve(const ServeOptions& o) {
   if (registered) unregister_sim_server(me);
   std::cerr << "motionctl sim: stopped at board time " << end.board_s << " s"
             << (g_stop.load() ? "" : " (idle limit)") << std::endl;
+  std::cerr << "motionctl sim: " << mc::sim::describe_speed(end, paced) << std::endl;
 }
 
 void stop() {
@@ -114,13 +131,24 @@ void add_sim_command(CLI::App& app) {
   CLI::App* srv = sim->add_subcommand(
       "serve", "Run the virtual board in the foreground; prints its pseudo-terminal's path on stdout");
   srv->footer(
-      "The Verilated board top (3 axes, handwheel) at the machine's clock, a DC-motor plant per axis of\n"
+      "The board (3 axes, handwheel) at the machine's clock: its twin (hls/, the default) or with --engine\n"
+      "rtl the Verilated board top, clock by clock. A DC-motor plant per axis of\n"
       "the machine config (--config before the command, or the built-in one) on its encoder and H-bridge\n"
       "pins, and its UART bit by bit on a pseudo-terminal: 'motionctl --port PTY status' talks to it.\n"
-      "Paced to the wall clock (never ahead of it; slower when the model is slower); the board's watchdog\n"
-      "runs on board time. Status lines go to stderr. SIGINT or SIGTERM stops it.");
+      "--speed 1 paces it to the wall clock (never ahead of it; slower when the model is slower) and counts\n"
+      "the 100 us periods finished late; --speed max runs free. On exit it prints the periods late or the\n"
+      "speed reached (x real time). The board's watchdog runs on board time. Status lines go to stderr.\n"
+      "SIGINT or SIGTERM stops it.");
   srv->add_option("--config", o->config, "Machine TOML (the same as the global --config)")->type_name("FILE");
-  srv->add_flag("--fast", o->fast, "Do not pace: run as fast as the model goes");
+  srv->add_option("--speed", o->speed, "1: paced to the wall clock (default); max: free-running")
+      ->type_name("1|max");
+  srv->add_flag("--fast", o->fast, "The same as --speed max");
+  srv->add_option("--host-wait", o->host_wait,
+                  "Free-running: after answering a request, wait up to this long for the host's next one "
+                  "(default 0: never)")
+      ->type_name("TIME");
+  srv->add_option("--engine", o->engine, "twin: the board's C++ twin (default); rtl: the Verilated board")
+      ->type_name("twin|rtl");
   srv->add_option("--idle-exit", o->idle_exit, "Exit after this many minutes without host bytes (0: never)")
       ->type_name("MIN");
   srv->add_option("--status-every", o->status_every, "Interval of the status lines (default 5s)")

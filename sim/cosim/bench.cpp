@@ -25,6 +25,63 @@ namespace mc::sim {
 
 namespace fs = std::filesystem;
 
+std::vector<std::array<std::string, 3>> rtl_check_runs() {
+  // Short runs (the step) at two sample periods, and the circle at 1 ms:
+  // about 15 s of RTL time on two cores.
+  return {{"fpga-100us", "step", "same"}, {"fpga-min", "step", "tuned"}, {"fpga-1ms", "circle", "tuned"}};
+}
+
+namespace {
+
+// Runs the specs in child processes, `jobs` at once, the costliest first.
+std::vector<RunResult> run_pool(const std::vector<RunSpec>& specs, int jobs, const BenchStatus& status) {
+  std::vector<size_t> order(specs.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const auto cost = [](const RunSpec& s) {
+      // The RTL runs about 200 times slower than the twin.
+      return s.scenario.duration_s * (s.platform.host ? 0.1 : s.engine == Engine::Rtl ? 200.0 : 1.0);
+    };
+    return cost(specs[a]) > cost(specs[b]);
+  });
+  std::vector<RunResult> runs(specs.size());
+  std::vector<std::pair<size_t, std::unique_ptr<Child>>> running;
+  size_t next = 0;
+  int done = 0;
+  const int total = int(specs.size());
+  std::string last;
+  while (done < total) {
+    while (next < order.size() && int(running.size()) < std::max(1, jobs)) {
+      const size_t i = order[next++];
+      running.emplace_back(i, std::make_unique<Child>(specs[i]));
+    }
+    std::vector<pollfd> fds;
+    fds.reserve(running.size());
+    for (auto& [i, c] : running) fds.push_back({c->fd(), POLLIN, 0});
+    if (::poll(fds.data(), fds.size(), 500) < 0 && errno != EINTR)
+      throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
+    for (size_t k = 0; k < running.size();) {
+      auto& [i, c] = running[k];
+      if (fds[k].revents && !c->pump()) {
+        runs[i] = c->result();
+        ++done;
+        last = specs[i].platform.name + " " + specs[i].scenario.name + " " + policy_name(specs[i].policy) +
+               " " + engine_name(specs[i].engine);
+        running.erase(running.begin() + long(k));
+        fds.erase(fds.begin() + long(k));
+        continue;
+      }
+      ++k;
+    }
+    double frac = 0;
+    for (auto& [i, c] : running) frac += c->progress();
+    if (status) status(done, total, last, frac);
+  }
+  return runs;
+}
+
+}  // namespace
+
 BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<RunSpec> specs;
@@ -54,48 +111,34 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
         r.record_dt_s = 1e-5;
         specs.push_back(std::move(r));
       }
-  // The slowest first, so that the pool ends together.
-  std::vector<size_t> order(specs.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    const auto cost = [](const RunSpec& s) { return s.scenario.duration_s * (s.platform.host ? 0.1 : 1.0); };
-    return cost(specs[a]) > cost(specs[b]);
-  });
+  // The RTL check: the same specs on the Verilated core, in the same pool.
+  std::vector<size_t> checked;
+  if (o.rtl_check && o.engine == Engine::Twin)
+    for (const auto& [p, sc, pol] : rtl_check_runs())
+      for (size_t i = 0; i < specs.size(); ++i)
+        if (specs[i].platform.name == p && specs[i].scenario.name == sc &&
+            policy_name(specs[i].policy) == pol)
+          checked.push_back(i);
+  const size_t n_table = specs.size();
+  for (size_t i : checked) {
+    RunSpec r = specs[i];
+    r.engine = Engine::Rtl;
+    specs.push_back(std::move(r));
+  }
+  std::vector<RunResult> all = run_pool(specs, o.jobs, status);
 
   BenchResult res;
-  res.runs.resize(specs.size());
-  std::vector<std::pair<size_t, std::unique_ptr<Child>>> running;
-  size_t next = 0;
-  int done = 0;
-  const int total = int(specs.size());
-  std::string last;
-  while (done < total) {
-    while (next < order.size() && int(running.size()) < std::max(1, o.jobs)) {
-      const size_t i = order[next++];
-      running.emplace_back(i, std::make_unique<Child>(specs[i]));
-    }
-    std::vector<pollfd> fds;
-    fds.reserve(running.size());
-    for (auto& [i, c] : running) fds.push_back({c->fd(), POLLIN, 0});
-    if (::poll(fds.data(), fds.size(), 500) < 0 && errno != EINTR)
-      throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
-    for (size_t k = 0; k < running.size();) {
-      auto& [i, c] = running[k];
-      if (fds[k].revents && !c->pump()) {
-        res.runs[i] = c->result();
-        ++done;
-        last = specs[i].platform.name + " " + specs[i].scenario.name + " " + policy_name(specs[i].policy);
-        running.erase(running.begin() + long(k));
-        fds.erase(fds.begin() + long(k));
-        continue;
-      }
-      ++k;
-    }
-    double frac = 0;
-    for (auto& [i, c] : running) frac += c->progress();
-    if (status) status(done, total, last, frac);
+  res.runs.assign(std::make_move_iterator(all.begin()), std::make_move_iterator(all.begin() + long(n_table)));
+  for (size_t k = 0; k < checked.size(); ++k) {
+    RtlCheck c;
+    c.run = checked[k];
+    c.rtl = std::move(all[n_table + k]);
+    const RunResult& t = res.runs[c.run];
+    c.same_outputs = t.sample_clock == c.rtl.sample_clock && t.sample_u == c.rtl.sample_u;
+    res.rtl_checks.push_back(std::move(c));
   }
-  if (o.probe_kernel && o.engine == Engine::Rtl) res.probe = probe_kernel(o.machine, o.quick ? 2e-4 : 2e-3);
+  if (o.probe_kernel && (o.engine == Engine::Rtl || !checked.empty()))
+    res.probe = probe_kernel(o.machine, o.quick ? 2e-4 : 2e-3);
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }
@@ -179,6 +222,10 @@ KernelProbe probe_kernel(const MachineConfig& m, double sim_s) {
   KernelProbe p;
   p.probe_sim_s = sim_s;
   const double period = 1 / m.clock_hz;
+  // The bare loop runs 10 times as long: it is the yardstick of the RTL
+  // engine's speed.
+  p.bare_speed = in_child(
+      [&] { return bare_rtl_clocks_per_s(uint64_t(std::llround(10 * sim_s * m.clock_hz))) / m.clock_hz; });
   p.clocked_speed = in_child([&] {
     sc_core::sc_clock clk("clk", sc_core::sc_time(period, sc_core::SC_SEC));
     ClockedCore c("core");
@@ -383,24 +430,114 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
         "made "
         "for a fast loop can be unstable at 10 ms.\n\n";
 
-  // Speed.
-  md << "## Simulation speed\n\n| platform | engine | simulated s | wall s | x real time "
-        "|\n|---|---|---|---|---|\n";
-  std::map<std::string, std::pair<double, double>> speed;
-  for (const RunResult& r : br.runs) {
-    auto& e = speed[r.platform + " | " + r.engine];
-    e.first += r.sim_s;
-    e.second += r.wall_s;
+  // The README's table (scripts/bench_readme.sh copies it there): the circle
+  // under the tuned gains, every platform.
+  if (std::count(scenario_order.begin(), scenario_order.end(), "circle") &&
+      std::count(policies.begin(), policies.end(), std::string("tuned"))) {
+    std::string head = "|", rule = "|", row = "|";
+    for (const std::string& p : platform_order) {
+      const RunResult* r = find(p, "circle", "tuned");
+      if (!r) continue;
+      head += " " + (p == "fpga-min" ? "fpga-" + fmt(r->gains.ts * 1e6, 2) + "us" : p) + " |";
+      rule += "---|";
+      row += " " + um(r->contour.rms) + " µm |";
+    }
+    double twin_sim = 0, twin_wall = 0, twin_cpu = 0;
+    for (const RunResult& r : br.runs)
+      if (r.engine != "host") {
+        twin_sim += r.sim_s;
+        twin_wall += r.wall_s;
+        twin_cpu += r.cpu_s;
+      }
+    size_t same = 0;
+    for (const RtlCheck& c : br.rtl_checks) same += c.same_outputs;
+    md << "<!-- README table -->\n"
+       << head << "\n"
+       << rule << "\n"
+       << row << "\n\n"
+       << "The full benchmark took " << fmt(br.wall_s, 1) << " s with " << o.jobs << " jobs; its FPGA runs "
+       << "went at " << fmt(twin_wall > 0 ? twin_sim / twin_wall : 0, 1) << "x real time on the "
+       << engine_name(o.engine) << " engine (" << fmt(twin_cpu > 0 ? twin_sim / twin_cpu : 0, 1)
+       << "x on CPU time)";
+    if (!br.rtl_checks.empty())
+      md << ", and " << same << " of " << br.rtl_checks.size()
+         << " runs repeated on the Verilated RTL gave the same controller outputs, sample for sample";
+    md << (o.quick ? " (quick run: not for comparison)" : "") << ".\n<!-- end of README table -->\n\n";
   }
+
+  // The RTL check: the same runs on the Verilated core.
+  if (!br.rtl_checks.empty()) {
+    md << "## The twin against the RTL\n\nThe tables above ran on the C++ twin of the core (hls/). These "
+          "runs were repeated on the Verilated RTL in the same benchmark:\n\n"
+          "| platform | scenario | policy | error, twin (um) | error, RTL (um) | controller outputs |\n"
+          "|---|---|---|---|---|---|\n";
+    for (const RtlCheck& c : br.rtl_checks) {
+      const RunResult& t = br.runs[c.run];
+      const auto err = [&](const RunResult& r) {
+        return r.scenario == "step" ? r.follow[0].rms : r.contour.rms;
+      };
+      md << "| " << t.platform << " | " << t.scenario << " | " << t.policy << " | " << um(err(t)) << " | "
+         << um(err(c.rtl)) << " | "
+         << (c.same_outputs ? "identical (" + std::to_string(t.sample_u[0].size()) + " samples)"
+                            : std::string("**differ**"))
+         << " |\n";
+    }
+    md << "\n(error: RMS following error of x for the step, RMS contour error for paths.)\n\n";
+  }
+
+  // Speed.
+  md << "## Simulation speed\n\nWall time, and CPU time (the machine may be shared: the runs go two at a "
+        "time and other work may run beside them).\n\n| platform | engine | simulated s | wall s | x real "
+        "time | CPU s | x real time on CPU time |\n|---|---|---|---|---|---|---|\n";
+  struct Sum {
+    double sim = 0, wall = 0, cpu = 0;
+  };
+  std::map<std::string, Sum> speed;
+  const auto add_speed = [&](const RunResult& r) {
+    Sum& e = speed[r.platform + " | " + r.engine];
+    e.sim += r.sim_s;
+    e.wall += r.wall_s;
+    e.cpu += r.cpu_s;
+  };
+  for (const RunResult& r : br.runs) add_speed(r);
+  for (const RtlCheck& c : br.rtl_checks) add_speed(c.rtl);
   for (const std::string& p : platform_order)
     for (const auto& [k, v] : speed)
       if (k.rfind(p + " |", 0) == 0)
-        md << "| " << k << " | " << fmt(v.first, 2) << " | " << fmt(v.second, 2) << " | "
-           << fmt(v.first / v.second, 3) << " |\n";
-  md << "\nGoals: the RTL co-simulation of the two-axis loop at the " << o.machine.clock_hz / 1e6
-     << " MHz core clock at least 1x real time on one core; the twin-only path at least 100x. "
-        "`motionctl bench --engine twin` runs the twin path. The whole benchmark took "
+        md << "| " << k << " | " << fmt(v.sim, 2) << " | " << fmt(v.wall, 2) << " | "
+           << fmt(v.sim / v.wall, 3) << " | " << fmt(v.cpu, 2) << " | "
+           << fmt(v.cpu > 0 ? v.sim / v.cpu : 0, 3) << " |\n";
+  // The RTL runs against the bare model, on CPU time (the machine may be
+  // shared, the runs two at a time).
+  double rtl_sim = 0, rtl_cpu = 0;
+  for (const RtlCheck& c : br.rtl_checks) {
+    rtl_sim += c.rtl.sim_s;
+    rtl_cpu += c.rtl.cpu_s;
+  }
+  for (const RunResult& r : br.runs)
+    if (r.engine == "rtl") {
+      rtl_sim += r.sim_s;
+      rtl_cpu += r.cpu_s;
+    }
+  if (!br.other_speeds.empty()) {
+    md << "\n| workload | engine | simulated s | wall s | x real time | CPU s | x real time on CPU time "
+          "|\n|---|---|---|---|---|---|---|\n";
+    for (const SpeedRow& r : br.other_speeds)
+      md << "| " << r.what << " | " << r.engine << " | " << fmt(r.sim_s, 3) << " | " << fmt(r.wall_s, 2)
+         << " | " << fmt(r.wall_s > 0 ? r.sim_s / r.wall_s : 0, 3) << " | " << fmt(r.cpu_s, 2) << " | "
+         << fmt(r.cpu_s > 0 ? r.sim_s / r.cpu_s : 0, 3) << " |\n";
+  }
+  md << "\nGoals: the twin co-simulation of the two-axis loop at least 100x real time; the RTL "
+        "co-simulation at least 75 % of the speed of the bare Verilated core measured in the same run; the "
+        "virtual board (`motionctl sim serve --speed max`, measured in process under a host session) at "
+        "least 10x on the twin. "
+        "`motionctl bench --engine rtl` runs every table on the RTL. The whole benchmark took "
      << fmt(br.wall_s, 1) << " s of wall time with " << o.jobs << " jobs.\n\n";
+  if (br.probe.bare_speed > 0 && rtl_cpu > 0)
+    md << "On CPU time: the Verilated core alone, clocked in a bare C++ loop with its inputs held, ran at "
+       << fmt(br.probe.bare_speed, 4) << "x real time in this run; the RTL co-simulations above (plant, "
+       << "harness and SystemC included) at " << fmt(rtl_sim / rtl_cpu, 4) << "x, "
+       << fmt(100 * rtl_sim / rtl_cpu / br.probe.bare_speed, 0) << " % of it.\n\n";
   if (br.probe.probe_sim_s > 0)
     md << "SystemC kernel choice (probe of " << br.probe.probe_sim_s * 1e3
        << " ms of core time, no plant): the "

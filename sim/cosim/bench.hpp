@@ -3,6 +3,7 @@
 // at once in child processes, then results.csv, report.md and PNG plots.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -16,7 +17,10 @@ struct BenchOptions {
   JitterHistogram jitter;
   std::string out_dir = "build/bench";
   bool quick = false;
-  Engine engine = Engine::Rtl;
+  Engine engine = Engine::Twin;
+  // With the twin engine: rerun a subset on the RTL (rtl_check_runs()) and
+  // compare the controller outputs sample for sample.
+  bool rtl_check = true;
   int jobs = 2;
   uint64_t seed = 1;
   std::vector<std::string> platforms, scenarios;  // empty: all
@@ -26,13 +30,33 @@ struct BenchOptions {
 };
 
 struct KernelProbe {
+  double bare_speed = 0;       // simulated s per wall s, the Verilated core alone in a C++ loop
   double clocked_speed = 0;    // simulated s per wall s, core as an sc_clock-driven module
   double decoupled_speed = 0;  // the same core, stepped in a decoupled process
   double probe_sim_s = 0;
 };
 
+// A run of the table repeated on the RTL engine.
+struct RtlCheck {
+  size_t run = 0;  // index into BenchResult::runs
+  RunResult rtl;
+  bool same_outputs = false;  // every controller output and sample clock equal
+};
+
+// The runs the RTL check repeats: (platform, scenario, policy).
+std::vector<std::array<std::string, 3>> rtl_check_runs();
+
+// A speed measured outside the co-simulation (the virtual board), for the
+// report's speed table.
+struct SpeedRow {
+  std::string what, engine;
+  double sim_s = 0, wall_s = 0, cpu_s = 0;
+};
+
 struct BenchResult {
   std::vector<RunResult> runs;
+  std::vector<RtlCheck> rtl_checks;
+  std::vector<SpeedRow> other_speeds;
   KernelProbe probe;
   double wall_s = 0;
 };
@@ -45,9 +69,10 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status);
 // Returns the paths written.
 std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& r);
 
-// Sim speed of the core driven as a SystemC module by an sc_clock at the
-// core clock (SC_METHOD on each rising edge), against the decoupled process;
-// runs in a child process (SystemC elaborates once per process).
+// Sim speed of the Verilated core alone (a bare C++ loop, inputs held), of
+// the core driven as a SystemC module by an sc_clock at the core clock
+// (SC_METHOD on each rising edge), and of the decoupled process; each in a
+// child process (SystemC elaborates once per process).
 KernelProbe probe_kernel(const MachineConfig& m, double sim_s);
 
 }  // namespace mc::sim

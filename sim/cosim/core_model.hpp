@@ -6,6 +6,7 @@
 // the system test holds the two co-simulation paths to each other.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -30,10 +31,18 @@ class CoreModel {
  public:
   virtual ~CoreModel() = default;
   // This clock's outputs (before its edge) for these inputs, then the edge.
+  // The RTL fills those the co-simulation reads: pid_wready, tick, done and,
+  // per axis, pwm, dir, drv_en, drv_u, drv_cmd and cmd.
   virtual CoreOut cycle(const CoreIn& in) = 0;
   // n clocks with `in` held, at once, when that changes nothing but counters;
   // nullopt (and nothing done) otherwise. The RTL never skips.
   virtual std::optional<Skipped> try_skip(const CoreIn& in, uint32_t n) = 0;
+  // How many of the next clocks (up to limit) try_skip would take with `in`
+  // held (0: none; the RTL never skips).
+  virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
+  // This clock's outputs and PWM counter, without the edge (the twin).
+  virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
+  virtual uint32_t pwm_count() const { return 0; }
 };
 
 class TwinCore final : public CoreModel {
@@ -49,6 +58,12 @@ class TwinCore final : public CoreModel {
     twin_.skip(n);
     return s;
   }
+  uint32_t quiet_clocks(const CoreIn& in, uint32_t limit) const override {
+    const uint32_t n = std::min(limit, twin_.quiet_limit());
+    return n > 0 && twin_.quiet(in, n) ? n : 0;
+  }
+  CoreOut peek(const CoreIn& in) const override { return twin_.outputs(in.pid_we); }
+  uint32_t pwm_count() const override { return twin_.pwm_count(); }
 
  private:
   CoreTwin twin_;

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -246,7 +247,8 @@ class Machine {
   }
 
   void advance_to(uint64_t target) {
-    while (step_ < target) plant_step();
+    while (step_ < target)
+      if (!jump(target)) plant_step();
   }
 
   RunResult finish(double wall_s) {
@@ -306,6 +308,53 @@ class Machine {
     in_ = in;
   }
 
+  // The twin engine's event loop: from a step boundary, the whole plant
+  // steps in which the core only counts (no PID tick, drive update or done,
+  // no interpolator iteration, no encoder edge to show) go by with the core
+  // skipped over them at once. The plants still take every step, with the
+  // volts the clock path would sum for it (the drive holds; the PWM pin
+  // follows its counter), so positions and samples are the clock path's
+  // (Cosim.TwinAndRtlGiveIdenticalOutputs). It stops after the step in
+  // which an encoder count changes: that edge is shown clock by clock.
+  bool jump(uint64_t target) {
+    if (host() || s_.engine != Engine::Twin || step_ == start_step_ || pending_) return false;
+    for (int a = 0; a < kCoreAxes; ++a)
+      if (plant_[size_t(a)].encoder_count() != shown_[a]) return false;
+    uint64_t steps = target - step_;
+    if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
+    const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
+    const uint64_t most = q / k_;
+    if (most == 0) return false;
+    const CoreOut o = core_->peek(in_);
+    const uint32_t p0 = core_->pwm_count(), mask = (1u << CoreTwin::pwm_bits) - 1;
+    uint64_t j = 0;
+    bool edge = false;
+    while (j < most && !edge) {
+      for (int a = 0; a < kCoreAxes; ++a) {
+        const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
+        const double v = switching(d) ? (o.dir[a] ? -d.supply_v : d.supply_v) : drive_volts(d, o.drv_u[a]);
+        const uint32_t duty = CoreTwin::duty(o.drv_u[a]);
+        double sum = 0;
+        for (uint32_t c = 0; c < k_; ++c) {
+          // The pin before clock i's edge: now, then after each skipped edge.
+          const uint64_t i = j * k_ + c;
+          const bool on =
+              !switching(d) || (o.drv_en[a] && (i == 0 ? o.pwm[a] : duty > ((p0 + i - 1) & mask)));
+          sum += on ? v : 0.0;
+        }
+        plant_[size_t(a)].step(sum / k_);
+      }
+      ++step_;
+      ++j;
+      if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
+      for (int a = 0; a < kCoreAxes; ++a) edge = edge || plant_[size_t(a)].encoder_count() != shown_[a];
+    }
+    if (!core_->try_skip(in_, uint32_t(j * k_)))
+      throw std::logic_error("co-simulation: a quiet stretch was not");
+    res_.clocks_skipped += j * k_;
+    return true;
+  }
+
   // Encoder pins: the counts the plant reached at the start of the step are
   // shown one edge every other clock (the decoder's limit is about one per
   // clock), more than half a step's worth carried to the next step.
@@ -360,7 +409,8 @@ class Machine {
     double sum[kCoreAxes] = {};
     uint32_t c = 0;
     while (c < k_) {
-      for (int a = 0; a < kCoreAxes; ++a) {
+      // The pins change only while edges are due (settle clocks).
+      for (int a = 0; a < kCoreAxes && (c == 0 || c <= settle); ++a) {
         const QuadPins p = quadrature_pins(emitted(a, c), s_.machine.axes[size_t(a)].encoder_cpr);
         in_.enc_a[a] = p.a;
         in_.enc_b[a] = p.b;
@@ -399,9 +449,17 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) volts[a] = sum[a] / k_;
   }
 
-  double clock_volts(int a, const CoreOut& o) const {
+  double clock_volts(int a, const CoreOut& o) {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
-    if (!switching(d)) return drive_volts(d, o.drv_u[a]);
+    if (!switching(d)) {
+      // The drive value changes once a sample: convert it then.
+      if (o.drv_u[a] != volts_u_[a] || !volts_set_[a]) {
+        volts_u_[a] = o.drv_u[a];
+        volts_v_[a] = drive_volts(d, o.drv_u[a]);
+        volts_set_[a] = true;
+      }
+      return volts_v_[a];
+    }
     if (!o.drv_en[a] || !o.pwm[a]) return 0;
     return o.dir[a] ? -d.supply_v : d.supply_v;
   }
@@ -460,6 +518,9 @@ class Machine {
   int32_t cmd_now_[kCoreAxes] = {};
   bool pending_ = false;
   uint64_t done_clock_ = 0;
+  int16_t volts_u_[kCoreAxes] = {};  // clock_volts' last drive value and its volts
+  double volts_v_[kCoreAxes] = {};
+  bool volts_set_[kCoreAxes] = {};
   RunResult res_;
 };
 
@@ -589,6 +650,7 @@ void fields(IO& io, R& r) {
   io.pod(r.tracking);
   io.pod(r.sim_s);
   io.pod(r.wall_s);
+  io.pod(r.cpu_s);
   io.pod(r.clocks_cycled);
   io.pod(r.clocks_skipped);
 }
@@ -617,14 +679,23 @@ RunResult deserialize(const std::string& bytes) {
   return r;
 }
 
+double process_cpu_s() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
 RunResult run(const RunSpec& spec) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = process_cpu_s();
   Machine machine(spec);
   SystemModel model("system", machine, spec);
   sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
   sc_core::sc_start();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return machine.finish(wall);
+  RunResult r = machine.finish(wall);
+  r.cpu_s = process_cpu_s() - cpu0;
+  return r;
 }
 
 // The child writes 'P' + double for progress, then 'R' + size + result, or

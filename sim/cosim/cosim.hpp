@@ -108,8 +108,11 @@ struct RunResult {
   mc::host::StepMetrics step{};      // step only, axis x
   bool tracking = true;              // within a quarter of the move of the command at the end
   double sim_s = 0, wall_s = 0;
+  double cpu_s = 0;  // the process's CPU time for the run (the machine may be shared)
   uint64_t clocks_cycled = 0, clocks_skipped = 0;
 };
+// This process's CPU time, s.
+double process_cpu_s();
 
 // One scenario. SystemC elaborates a design once per process: call run() at
 // most once in a process, or use run_isolated().

@@ -9,6 +9,7 @@
 //               if (rx.has_byte()) use(rx.take());
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -35,6 +36,25 @@ class UartSender {
   bool idle() const { return q_.empty() && bit_ < 0; }
   // Bytes not yet fully sent, the one on the line included.
   size_t queued() const { return q_.size() + (bit_ >= 0 ? 1 : 0); }
+  // How many of the next clock() calls surely leave pin() as it is.
+  uint32_t steady() const {
+    if (bit_ < 0) return q_.empty() ? UINT32_MAX : 0;
+    return cnt_ == 0 ? 0 : uint32_t(cpb_ - cnt_);
+  }
+  // n clock() calls; inside a bit only the counter moves.
+  void clock_n(uint32_t n) {
+    while (n > 0) {
+      if (bit_ < 0 && q_.empty()) return;
+      if (bit_ >= 0 && cnt_ > 0 && cnt_ + 1 < cpb_) {
+        const uint32_t m = std::min(n, uint32_t(cpb_ - 1 - cnt_));
+        cnt_ += int(m);
+        n -= m;
+        continue;
+      }
+      clock();
+      --n;
+    }
+  }
   // Advance one clock.
   void clock() {
     if (bit_ < 0) {
@@ -90,6 +110,21 @@ class UartReceiver {
       else
         ++framing_errors_;
       bit_ = -1;
+    }
+  }
+  // n clock(level) calls with the line held; between samples only the
+  // counter moves.
+  void clock_n(bool level, uint32_t n) {
+    while (n > 0) {
+      if (bit_ < 0 && level) return;
+      if (bit_ >= 0 && cnt_ > 1) {
+        const uint32_t m = std::min(n, uint32_t(cnt_ - 1));
+        cnt_ -= int(m);
+        n -= m;
+        continue;
+      }
+      clock(level);
+      --n;
     }
   }
   bool has_byte() const { return !out_.empty(); }

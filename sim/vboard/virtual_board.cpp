@@ -10,15 +10,14 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
-#include <thread>
 
-#include "Vmotioncore_icebreaker.h"
 #include "host/base/errors.hpp"
 #include "sim/plant/dc_motor.hpp"
+#include "sim/vboard/board_model.hpp"
 #include "sim/vboard/uart_model.hpp"
-#include "verilated.h"
 
 namespace mc::sim {
 
@@ -41,37 +40,36 @@ std::string sys_error(const char* call) {
 
 }  // namespace
 
+const char* board_engine_name(BoardEngine e) {
+  return e == BoardEngine::Rtl ? "rtl" : "twin";
+}
+
+BoardEngine parse_board_engine(const std::string& name, const std::string& what) {
+  if (name == "twin") return BoardEngine::Twin;
+  if (name == "rtl") return BoardEngine::Rtl;
+  throw mc::host::InputError(what, "'" + name + "'", "twin or rtl");
+}
+
 struct VirtualBoard::Impl {
-  // One axis slot of the board: its pins and, when configured, its plant.
+  // One axis slot of the board: its plant, when configured.
   struct Slot {
-    uint8_t *enc_a, *enc_b, *enc_z;
-    const uint8_t *pwm, *dir, *en;
     std::unique_ptr<AxisPlant> plant;
     int cpr = 0;
     double supply_v = 0;
     int64_t shown = 0, emit_from = 0, emit_n = 0;  // encoder edges of the current step
-    int32_t drive_sum = 0;                         // clocks +1 / -1 with the bridge on, this step
   };
 
-  Impl(const MachineConfig& cfg, uint32_t seed)
+  Impl(const MachineConfig& cfg, uint32_t seed, BoardEngine e)
       : m(cfg),
         k(whole_clocks_per_step(cfg)),
         cpb(uart_clocks_per_bit(long(std::llround(cfg.clock_hz)), kBoardBaud)),
+        engine(e),
         tx(cpb),
         rx(cpb) {
     if (m.axes.size() > size_t(kBoardAxes))
       throw mc::host::InputError("axes (" + m.source + ")", std::to_string(m.axes.size()),
                                  "at most " + std::to_string(kBoardAxes) + " (the board's x, y, z)");
-    ctx = std::make_unique<VerilatedContext>();
-    // An iCE40 configures every flip-flop and block RAM to zero; a seed
-    // asks for Verilator's random power-up state instead.
-    ctx->randReset(seed ? 2 : 0);
-    ctx->randSeed(int(seed & 0x7fffffff));
-    top = std::make_unique<Vmotioncore_icebreaker>(ctx.get(), "board");
-    Vmotioncore_icebreaker& t = *top;
-    slot[0] = {&t.X_ENC_A, &t.X_ENC_B, &t.X_ENC_Z, &t.X_PWM, &t.X_DIR, &t.X_EN, {}, 0, 0, 0, 0, 0, 0};
-    slot[1] = {&t.Y_ENC_A, &t.Y_ENC_B, &t.Y_ENC_Z, &t.Y_PWM, &t.Y_DIR, &t.Y_EN, {}, 0, 0, 0, 0, 0, 0};
-    slot[2] = {&t.Z_ENC_A, &t.Z_ENC_B, &t.Z_ENC_Z, &t.Z_PWM, &t.Z_DIR, &t.Z_EN, {}, 0, 0, 0, 0, 0, 0};
+    board = make_board_model(e, seed);
     for (size_t a = 0; a < m.axes.size(); ++a) {
       Slot& s = slot[a];
       s.plant = std::make_unique<AxisPlant>(m.axes[a], m.plant_dt_s);
@@ -80,21 +78,14 @@ struct VirtualBoard::Impl {
       s.shown = s.plant->encoder_count();
       ++naxes;
     }
-    t.CLK = 0;
-    t.RX = 1;
-    t.BTN_N = 1;
-    t.ESTOP = 0;
-    t.X_LIM = t.Y_LIM = t.Z_LIM = 0;
-    t.HW_A = t.HW_B = 0;
-    for (Slot& s : slot) {
-      const QuadPins p = quadrature_pins(s.shown, s.plant ? s.cpr : 1 << 30);
-      *s.enc_a = p.a;
-      *s.enc_b = p.b;
-      *s.enc_z = s.plant ? p.z : 0;
+    for (int a = 0; a < kBoardAxes; ++a) {
+      const Slot& s = slot[a];
+      const QuadPins q = quadrature_pins(s.shown, s.plant ? s.cpr : 1 << 30);
+      pins.enc_a[a] = q.a;
+      pins.enc_b[a] = q.b;
+      pins.enc_z[a] = s.plant ? q.z : false;
     }
-    t.eval();
   }
-  ~Impl() { top->final(); }
 
   // Encoder edges of this step: the count the plant reached, at most one
   // edge every other clock (the decoder's rate), the rest carried over.
@@ -109,53 +100,90 @@ struct VirtualBoard::Impl {
     }
   }
 
+  // One plant step: the board's clocks in stretches with its input pins
+  // held (an encoder edge every other clock while edges are due, RX at the
+  // host line's bit edges), then the plants with the drive's mean over the
+  // step.
   void plant_step(std::vector<uint8_t>& out) {
     plan_edges();
     uint32_t edges_until = 0;  // clocks in which some encoder pin still changes
     for (int a = 0; a < naxes; ++a)
       edges_until = std::max<uint32_t>(edges_until, uint32_t(2 * std::llabs(slot[a].emit_n)));
-    Vmotioncore_icebreaker& t = *top;
     bool active = !tx.idle() || rx.busy();
-    for (uint32_t c = 0; c < k; ++c) {
-      // Pins change only on even clocks while edges are due.
-      if (c < edges_until && (c & 1) == 0) {
-        for (int a = 0; a < naxes; ++a) {
-          Slot& s = slot[a];
-          const int64_t n = std::min<int64_t>(std::llabs(s.emit_n), int64_t(c / 2 + 1));
-          const QuadPins p = quadrature_pins(s.emit_from + (s.emit_n < 0 ? -n : n), s.cpr);
-          *s.enc_a = p.a;
-          *s.enc_b = p.b;
-          *s.enc_z = p.z;
+    int32_t drive[kBoardAxes] = {};
+    uint32_t c = 0;
+    while (c < k) {
+      uint32_t hold = k - c;
+      if (c < edges_until) {
+        // Pins change only on even clocks while edges are due.
+        if ((c & 1) == 0) {
+          for (int a = 0; a < naxes; ++a) {
+            const Slot& s = slot[a];
+            const int64_t n = std::min<int64_t>(std::llabs(s.emit_n), int64_t(c / 2 + 1));
+            const QuadPins q = quadrature_pins(s.emit_from + (s.emit_n < 0 ? -n : n), s.cpr);
+            pins.enc_a[a] = q.a;
+            pins.enc_b[a] = q.b;
+            pins.enc_z[a] = q.z;
+          }
         }
+        const uint32_t next = (c | 1) + 1;  // the next even clock
+        if (next < edges_until) hold = std::min(hold, next - c);
       }
-      t.RX = tx.pin();
-      t.CLK = 1;
-      t.eval();
-      t.CLK = 0;
-      t.eval();
-      for (int a = 0; a < naxes; ++a) {
-        Slot& s = slot[a];
-        if (*s.en && *s.pwm) s.drive_sum += *s.dir ? -1 : 1;
-      }
-      rx.clock(t.TX);
-      tx.clock();
+      pins.rx = tx.pin();
+      const uint32_t steady = tx.steady();
+      if (steady < hold) hold = steady + 1;
+      const uint32_t n = board->run(pins, hold, drive);
+      rx.clock_n(board->tx(), n);
+      tx.clock_n(n);
+      c += n;
     }
     active = active || !tx.idle() || rx.busy() || rx.has_byte();
     while (rx.has_byte()) out.push_back(rx.take());
     for (int a = 0; a < naxes; ++a) {
       Slot& s = slot[a];
-      s.plant->step(s.supply_v * double(s.drive_sum) / double(k));
-      s.drive_sum = 0;
+      s.plant->step(s.supply_v * double(drive[a]) / double(k));
     }
     cycles += k;
     if (active) last_activity = cycles;
   }
 
+  // The twin's event loop: from a step boundary, the whole plant steps in
+  // which the board only counts (the host line idle, no frame being worked
+  // on, no PID tick or drive update, no interpolator iteration, no encoder
+  // edge to show) go by with the board advanced over them at once. The
+  // plants still take every step, with the drive the clock-by-clock path
+  // would count (the PWM pins follow their counters), so positions and
+  // bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs). It stops
+  // after the step in which an encoder count changes.
+  bool jump(uint64_t steps) {
+    if (!tx.idle() || rx.busy() || rx.has_byte()) return false;
+    for (int a = 0; a < naxes; ++a)
+      if (slot[a].plant->encoder_count() != slot[a].shown) return false;
+    pins.rx = tx.pin();
+    const uint64_t most = board->idle_clocks(pins, uint32_t(std::min<uint64_t>(steps * k, 1u << 30))) / k;
+    if (most == 0) return false;
+    uint64_t j = 0;
+    bool edge = false;
+    while (j < most && !edge) {
+      for (int a = 0; a < naxes; ++a) {
+        Slot& s = slot[a];
+        s.plant->step(s.supply_v * double(board->idle_drive(a, uint32_t(j * k), k)) / double(k));
+        edge = edge || s.plant->encoder_count() != s.shown;
+      }
+      ++j;
+    }
+    board->advance(pins, uint32_t(j * k));
+    rx.clock_n(board->tx(), uint32_t(j * k));
+    cycles += j * k;
+    return true;
+  }
+
   MachineConfig m;
   uint32_t k;
   int cpb;
-  std::unique_ptr<VerilatedContext> ctx;
-  std::unique_ptr<Vmotioncore_icebreaker> top;
+  BoardEngine engine;
+  std::unique_ptr<BoardModel> board;
+  IcebreakerPins pins;
   Slot slot[kBoardAxes];
   int naxes = 0;
   UartSender tx;
@@ -163,7 +191,8 @@ struct VirtualBoard::Impl {
   uint64_t cycles = 0, last_activity = 0;
 };
 
-VirtualBoard::VirtualBoard(const MachineConfig& m, uint32_t seed) : impl_(std::make_unique<Impl>(m, seed)) {}
+VirtualBoard::VirtualBoard(const MachineConfig& m, uint32_t seed, BoardEngine e)
+    : impl_(std::make_unique<Impl>(m, seed, e)) {}
 VirtualBoard::~VirtualBoard() = default;
 
 void VirtualBoard::send(const uint8_t* p, size_t n) {
@@ -172,12 +201,22 @@ void VirtualBoard::send(const uint8_t* p, size_t n) {
 size_t VirtualBoard::rx_backlog() const {
   return impl_->tx.queued();
 }
-void VirtualBoard::run(uint64_t clocks, std::vector<uint8_t>& out) {
+void VirtualBoard::run(uint64_t clocks, std::vector<uint8_t>& out, bool until_output) {
   const uint64_t end = impl_->cycles + clocks;
-  while (impl_->cycles < end) impl_->plant_step(out);
+  const size_t before = out.size();
+  while (impl_->cycles < end && !(until_output && out.size() > before)) {
+    const uint64_t steps = (end - impl_->cycles + impl_->k - 1) / impl_->k;
+    if (!impl_->jump(steps)) impl_->plant_step(out);
+  }
 }
 uint64_t VirtualBoard::cycles() const {
   return impl_->cycles;
+}
+uint64_t VirtualBoard::stepped_clocks() const {
+  return impl_->board->stepped();
+}
+BoardEngine VirtualBoard::engine() const {
+  return impl_->engine;
 }
 double VirtualBoard::clock_hz() const {
   return impl_->m.clock_hz;
@@ -190,8 +229,10 @@ uint64_t VirtualBoard::link_quiet_clocks() const {
 }
 bool VirtualBoard::dormant() const {
   if (link_quiet_clocks() <= kMaxWatchdogClocks) return false;
-  for (const auto& s : impl_->slot)
-    if (*s.en || (s.plant && !s.plant->stuck())) return false;
+  for (int a = 0; a < kBoardAxes; ++a) {
+    const auto& s = impl_->slot[a];
+    if (impl_->board->en(a) || (s.plant && !s.plant->stuck())) return false;
+  }
   return true;
 }
 double VirtualBoard::position_m(int axis) const {
@@ -199,7 +240,7 @@ double VirtualBoard::position_m(int axis) const {
   return s.plant ? s.plant->position_m() : 0;
 }
 bool VirtualBoard::drive_enabled(int axis) const {
-  return *impl_->slot[axis].en;
+  return impl_->board->en(axis);
 }
 int VirtualBoard::configured_axes() const {
   return impl_->naxes;
@@ -248,6 +289,8 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   // The board runs in slices of 100 us: the host's bytes reach the RX line at
   // most that late, well inside the protocol's 1 ms byte timeout.
   const uint64_t slice = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 * board.clock_hz())));
+  const double period_s = double(slice) / board.clock_hz();
+  constexpr double kLead = 1e-3;
   const int fd = pty.master_fd();
   const auto t0 = Clock::now();
   auto last_host = t0;
@@ -256,10 +299,14 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   double last_report_wall = 0, last_report_board = board.board_seconds();
   std::vector<uint8_t> out;
   uint8_t buf[512];
+  // Free-running: host bytes came and the board has answered them since.
+  bool asked = false, answered = false;
+  const uint64_t quiet_line = 2 * uint64_t(std::llround(board.clock_hz() / 1e5));  // two bytes' time
 
   const auto report = [&](bool force) {
     st.wall_s = seconds_since(t0);
     st.board_s = board.board_seconds();
+    st.run_wall_s = st.wall_s - paused_s;
     const double dw = st.wall_s - last_report_wall;
     if (!force && dw < opt.status_every_s) return;
     if (dw > 0) st.rt_factor = (st.board_s - last_report_board) / dw;
@@ -273,6 +320,8 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     board.send(buf, size_t(n));
     st.bytes_in += uint64_t(n);
     last_host = Clock::now();
+    asked = true;
+    answered = false;
     return true;
   };
 
@@ -284,12 +333,36 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
       const size_t sent = n > 0 ? size_t(n) : 0;
       st.bytes_out += sent;
       st.bytes_dropped += out.size() - sent;
+      answered = answered || (asked && sent > 0);
       out.clear();
     }
+    if (!opt.paced && opt.host_wait_s > 0 && answered && board.link_quiet_clocks() >= quiet_line) {
+      // The board answered and the line went quiet: the host's next request
+      // comes after its own reaction time, which is wall time. Running on
+      // meanwhile would turn a millisecond of it into tens of milliseconds of
+      // board time; wait for it a little instead (the host then sees the
+      // board's time pass as a real board's would).
+      asked = answered = false;
+      const auto since = Clock::now();
+      pollfd p{fd, POLLIN, 0};
+      ::poll(&p, 1, int(std::lround(opt.host_wait_s * 1e3)));
+      st.host_wait_s += seconds_since(since);
+    }
+    ++st.periods;
     if (opt.paced) {
       const double ahead = board.board_seconds() - (seconds_since(t0) - paused_s);
       st.model_bound = ahead < 0;
-      if (ahead > 0) std::this_thread::sleep_for(std::chrono::duration<double>(ahead));
+      if (ahead < -period_s) ++st.late_periods;
+      // The board may run up to kLead ahead of the wall clock: it sleeps
+      // once per millisecond rather than once per period, so that a late
+      // wake-up from the OS eats into the lead instead of making the next
+      // periods late. A host byte ends the sleep.
+      if (ahead > kLead) {
+        pollfd p{fd, POLLIN, 0};
+        const double wait = ahead - kLead / 2;
+        const timespec ts{time_t(wait), long((wait - std::floor(wait)) * 1e9)};
+        ::ppoll(&p, 1, &ts, nullptr);
+      }
     } else {
       st.model_bound = true;
     }
@@ -312,7 +385,22 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   }
   st.wall_s = seconds_since(t0);
   st.board_s = board.board_seconds();
+  st.run_wall_s = st.wall_s - paused_s;
   return st;
+}
+
+std::string describe_speed(const ServeStatus& s, bool paced) {
+  char line[256];
+  if (paced)
+    std::snprintf(line, sizeof line, "%llu periods of 100 us, %llu late (%.3f %%), %.3f x real time",
+                  static_cast<unsigned long long>(s.periods), static_cast<unsigned long long>(s.late_periods),
+                  s.periods ? 100.0 * double(s.late_periods) / double(s.periods) : 0.0, s.speed());
+  else
+    std::snprintf(line, sizeof line,
+                  "free-running: %.3f s of board time in %.3f s (%.2f x real time; %.3f s of it waiting for "
+                  "the host's next request)",
+                  s.board_s, s.run_wall_s, s.speed(), s.host_wait_s);
+  return line;
 }
 
 }  // namespace mc::sim

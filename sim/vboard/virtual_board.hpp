@@ -35,11 +35,19 @@ constexpr int kBoardAxes = 3;
 // this long without a frame the drives are off for sure.
 constexpr uint64_t kMaxWatchdogClocks = uint64_t(1) << 24;
 
+// What clocks the board: the twin of the board top (hls/), which skips the
+// clocks in which only counters move, or the Verilated top, every clock.
+enum class BoardEngine { Twin, Rtl };
+const char* board_engine_name(BoardEngine e);
+// "twin" or "rtl"; throws InputError naming `what` otherwise.
+BoardEngine parse_board_engine(const std::string& name, const std::string& what);
+
 class VirtualBoard {
  public:
-  // Powers up as the FPGA does, every register and RAM zero; seed != 0:
-  // Verilator's random power-up state instead (seeded), to flush out reset bugs.
-  explicit VirtualBoard(const MachineConfig& m, uint32_t seed = 0);
+  // Powers up as the FPGA does, every register and RAM zero; seed != 0 (RTL
+  // engine): Verilator's random power-up state instead (seeded), to flush
+  // out reset bugs.
+  explicit VirtualBoard(const MachineConfig& m, uint32_t seed = 0, BoardEngine e = BoardEngine::Twin);
   ~VirtualBoard();
   VirtualBoard(const VirtualBoard&) = delete;
   VirtualBoard& operator=(const VirtualBoard&) = delete;
@@ -49,10 +57,14 @@ class VirtualBoard {
   // Bytes queued on RX that have not left the host's line yet.
   size_t rx_backlog() const;
   // Runs at least `clocks` clocks, in whole plant steps; appends the bytes the
-  // board sent on TX to out.
-  void run(uint64_t clocks, std::vector<uint8_t>& out);
+  // board sent on TX to out. until_output: stop after the plant step in
+  // which the first of them came.
+  void run(uint64_t clocks, std::vector<uint8_t>& out, bool until_output = false);
 
   uint64_t cycles() const;
+  // Of cycles(), the clocks the engine stepped one by one (the RTL: all).
+  uint64_t stepped_clocks() const;
+  BoardEngine engine() const;
   double clock_hz() const;
   double board_seconds() const { return double(cycles()) / clock_hz(); }
   uint32_t clocks_per_step() const;
@@ -99,12 +111,24 @@ struct ServeStatus {
   bool model_bound = false;  // slower than real time (running flat out)
   bool dormant = false;      // waiting for the host with the clock stopped
   uint64_t bytes_in = 0, bytes_out = 0, bytes_dropped = 0;
+  // Paced: the 100 us periods of board time run, and those finished more
+  // than a period after the wall clock reached their end.
+  uint64_t periods = 0, late_periods = 0;
+  double run_wall_s = 0;   // wall time not spent dormant
+  double host_wait_s = 0;  // of it, free-running: waiting for the host's next request
+  double speed() const { return run_wall_s > 0 ? board_s / run_wall_s : 0; }
 };
+// "N periods of 100 us, M late (x %)" when paced, else "x real time".
+std::string describe_speed(const ServeStatus& s, bool paced);
 
 struct ServeOptions {
-  bool paced = true;          // never ahead of the wall clock; false: flat out (--fast)
+  bool paced = true;          // at most 1 ms ahead of the wall clock; false: flat out (--speed max)
   double idle_exit_s = 0;     // return after this long without a host byte (0: never)
   double status_every_s = 5;  // wall seconds between status reports
+  // Free-running: after answering a host request, wait this long (wall) for
+  // the next one before running on, so that the host's reaction time does
+  // not turn into board time (0: never wait, the fastest).
+  double host_wait_s = 0;
   std::function<void(const ServeStatus&)> status;
 };
 

@@ -1,0 +1,289 @@
+// mc_board twin: the portable board core, clock by clock: motion_core plus
+// the link (uart_rx, uart_tx, link_rx, link_tx), the register file
+// (mc_regs), the safety logic (mc_safety), the handwheel decoder and the
+// LEDs. Mirrors rtl/mc_board.v, which documents how to use it; the pins
+// reach it through the board top (hls/motioncore_icebreaker.hpp).
+//
+// The sub-blocks are the twins of the RTL's instances, named as the RTL
+// names them, and wired as it wires them: clock() first takes every wire of
+// the current clock from the registers, then clocks each block on them.
+//
+// Synthesizable subset: fixed-width integers, no heap, static loop bounds.
+#pragma once
+
+#include <cstdint>
+
+#include "crc16_ccitt.hpp"
+#include "link_rx.hpp"
+#include "link_tx.hpp"
+#include "mc_regs.hpp"
+#include "mc_safety.hpp"
+#include "motion_core.hpp"
+#include "quad_decoder.hpp"
+#include "uart_rx.hpp"
+#include "uart_tx.hpp"
+
+namespace mc {
+
+// Inputs of one clock. Per-axis pins are bit masks, bit a for axis a.
+struct McBoardIn {
+  bool rst = false;
+  bool rx = true;                           // synchronized
+  uint8_t enc_a = 0, enc_b = 0, enc_z = 0;  // asynchronous: the decoders synchronize them
+  bool hw_a = false, hw_b = false;
+  uint8_t lim = 0;                   // synchronized
+  bool estop = false, stop = false;  // synchronized
+};
+
+template <int NAXES = 3, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 4, int CLK_HZ = 12'000'000,
+          int BAUD = 1'000'000, bool HANDWHEEL = true>
+class McBoard {
+ public:
+  using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true>;  // IDX_RAM: as the board builds it
+  using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD>;
+  using Safety = McSafety<NAXES>;
+  using Handwheel = QuadDecoder<FILT_W, 2, 2, 2>;  // position only (the rest is trimmed)
+  static constexpr int HB_W = clog2(CLK_HZ);       // heartbeat counter bits
+  static constexpr uint8_t AXES = (1u << NAXES) - 1;
+
+  UartRx<CLK_HZ, BAUD> u_urx;
+  UartTx<CLK_HZ, BAUD> u_utx;
+  LinkRx<CLK_HZ> u_lrx;
+  LinkTx u_ltx;
+  Regs u_regs;
+  Safety u_safety;
+  Core u_core;
+  Handwheel u_hw;  // unused without HANDWHEEL
+  uint32_t hb = 0;
+
+  // ---- outputs (all from registers) ----------------------------------------
+  bool tx_o() const { return u_utx.tx_o; }
+  bool pwm_o(int a) const { return u_core.pwm(a); }
+  bool dir_o(int a) const { return u_core.dir(a); }
+  bool drv_en_o(int a) const { return u_core.drv_en(a); }
+  bool led_fault_o() const { return u_safety.fault_o != 0; }
+  bool led_ok_o() const { return u_safety.armed_o || (!led_fault_o() && (hb >> (HB_W - 1) & 1)); }
+
+  // ---- one clock edge ------------------------------------------------------
+  void clock(const McBoardIn& in) {
+    Wires& w = w_;
+    wires(in, w);
+    const uint8_t tx_byte = u_ltx.byte_o;
+    const bool tx_valid = u_ltx.valid_o;
+    u_urx.clock(in.rst, in.rx);
+    u_utx.clock(in.rst, tx_byte, tx_valid);
+    u_lrx.clock(w.lrx);
+    u_ltx.clock(w.ltx);
+    regs_changed_ = u_regs.clock(w.regs);
+    u_safety.clock(w.safety);
+    u_core.clock(core_in_);
+    if constexpr (HANDWHEEL) {
+      if (u_hw.quiet(w.hw))
+        u_hw.skip(1);  // settled: the same as step(), for less work
+      else
+        u_hw.step(w.hw);
+    }
+    hb = (hb + 1) & ((1u << HB_W) - 1);
+    if (in.rst) hb = 0;
+  }
+
+  // ---- fast-forward ----------------------------------------------------------
+  // Clocks (up to limit) with these inputs held that change nothing but
+  // counters and timers: the UARTs idle or inside a bit, the link idle or
+  // waiting (for the next byte of a frame before the timeout, for uart_tx),
+  // no frame being worked on, no sample due, the decoders settled, no
+  // fault. skip(n) then does n of them at once, leaving exactly the state of
+  // n clocks; 0 means clock() this one.
+  uint32_t quiet(const McBoardIn& in, uint32_t limit) {
+    if (limit == 0 || in.rst) return 0;
+    uint32_t n = u_urx.quiet(in.rx, limit);
+    if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
+    if (n == 0 || u_regs.r.xs != Regs::X_IDLE) return 0;
+    if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
+    Wires& w = w_;
+    wires(in, w);
+    n = u_lrx.quiet(w.lrx, n);
+    if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet(w.regs)) return 0;
+    n = u_safety.quiet(w.safety, n);
+    const uint32_t t = u_core.quiet_limit();  // no tick, drive update or done in the n clocks
+    if (t < n) n = t;
+    if (n == 0 || !u_core.quiet(core_in_, n)) return 0;
+    if constexpr (HANDWHEEL)
+      if (!u_hw.quiet(w.hw)) return 0;
+    return n;
+  }
+  void skip(uint32_t n) {
+    u_urx.skip(n);
+    u_utx.skip(n);
+    u_lrx.skip(n);
+    u_ltx.skip(n);
+    u_safety.skip(n);
+    u_core.skip(n);
+    if constexpr (HANDWHEEL) u_hw.skip(n);
+    hb = (hb + n) & ((1u << HB_W) - 1);
+  }
+
+ private:
+  // The wires of the current clock: every block's inputs.
+  struct Wires {
+    LinkRxIn lrx;
+    LinkTxIn ltx;
+    typename Regs::In regs;
+    McSafetyIn safety;
+    QuadIn hw;
+  };
+
+  void wires(const McBoardIn& in, Wires& w) {
+    const auto& rr = u_regs.r;
+    const bool armed = u_safety.armed_o;
+    const bool pid_we = u_regs.pid_we_o(in.rst);
+    const uint32_t data = rr.data;
+
+    // Link.
+    w.lrx.rst = in.rst;
+    w.lrx.byte = u_urx.data_o;
+    w.lrx.valid = u_urx.valid_o;
+    w.lrx.ferr = u_urx.ferr_o;
+    w.lrx.pay_raddr = u_regs.pay_raddr_o();
+
+    // Safety.
+    McSafetyIn& s = w.safety;
+    s.rst = in.rst;
+    s.arm_set = rr.arm_set_o;
+    s.arm_clr = rr.arm_clr_o;
+    s.clr = rr.fclr_o;
+    s.cfg = rr.safety_o;
+    s.wdog = rr.wdog_o;
+    s.estop = in.estop;
+    s.stop = in.stop;
+    s.lim = uint8_t(in.lim & AXES);
+    s.ferr = rr.ferr_o;
+
+    // motion_core: the pins every clock; what comes from the register file
+    // and the arm state only when either may have changed (the register
+    // file's idle clocks change nothing).
+    MotionIn<NAXES>& m = core_in_;
+    for (int a = 0; a < NAXES; ++a) {
+      m.enc_a[a] = in.enc_a >> a & 1;
+      m.enc_b[a] = in.enc_b >> a & 1;
+      m.enc_z[a] = in.enc_z >> a & 1;
+    }
+    if (regs_changed_ || in.rst != m.rst || armed != m.drv_allow[0]) {
+      m.rst = in.rst;
+      m.pid_we = pid_we;
+      m.pid_waddr = m.pid_raddr = u_regs.pid_addr_o();
+      m.pid_wdata = data;
+      m.pid_re = u_regs.pid_re_o();
+      m.seg_wr = rr.seg_wr_o;
+      m.seg_wdata = data;
+      m.ip_abort = rr.ip_abort_o;
+      m.ip_hold = rr.ip_hold_o || !armed;
+      m.ip_clr = rr.ip_clr_o;
+      m.ip_set = u_regs.ip_set_o();
+      for (int32_t& p : m.ip_set_pos) p = int32_t(u_regs.ip_set_val_o());
+      m.drv_ovr_val = int16_t(u_regs.drv_ovr_val_o());
+      m.smp_raddr = u_regs.smp_raddr_o();
+      for (int a = 0; a < NAXES; ++a) {
+        m.enc_filt[a] = rr.enc_filt_o[a];
+        m.enc_dir_inv[a] = rr.enc_dir_inv_o >> a & 1;
+        m.enc_idx_clr_en[a] = rr.enc_idx_clr_en_o >> a & 1;
+        m.enc_pos_load[a] = rr.enc_pos_load_o >> a & 1;
+        m.enc_pos_load_val[a] = int32_t(data);
+        m.enc_idx_arm[a] = rr.enc_idx_arm_o >> a & 1;
+        m.enc_idx_disarm[a] = rr.enc_idx_disarm_o >> a & 1;
+        m.enc_err_clr[a] = rr.enc_err_clr_o >> a & 1;
+        m.drv_allow[a] = armed;
+        m.drv_ovr[a] = rr.drv_ovr_o >> a & 1;
+        m.drv_ovr_we[a] = rr.drv_ovr_we_o >> a & 1;
+      }
+    }
+
+    // The register file's inputs. Of the per-axis words only the axis its
+    // read address names is read (the others are left as they were).
+    typename Regs::In& ri = w.regs;
+    ri.rst = in.rst;
+    ri.frame = u_lrx.frame_o;
+    ri.seq = u_lrx.seq_o;
+    ri.cmd = u_lrx.cmd_o;
+    ri.len = u_lrx.len_o;
+    ri.pay_rdata = u_lrx.pay_rdata_o;
+    ri.crc_err = u_lrx.crc_err_o;
+    ri.framing = u_lrx.framing_o;
+    ri.junk = u_lrx.junk_o;
+    ri.tx_busy = u_ltx.busy_o();
+    ri.fault = u_safety.fault_o;
+    ri.armed = armed;
+    const auto& pid = u_core.pid();
+    ri.pid_wready = pid.wready();
+    ri.pid_rready = pid.rready(pid_we);
+    ri.pid_rvalid = pid.rvalid();
+    ri.pid_rdata = pid.rdata();
+    const auto& ip = u_core.interp();
+    ri.seg_count = uint32_t(ip.count());
+    ri.ip_busy = ip.busy();
+    ri.ip_underrun = ip.underrun();
+    ri.ip_ovf = ip.ovf();
+    ri.ip_seg_cnt = uint16_t(ip.seg_cnt());
+    uint32_t err = 0, armd = 0, seen = 0, den = 0, pen = 0;
+    for (int a = 0; a < NAXES; ++a) {
+      const auto& d = u_core.decoder(a);
+      err |= uint32_t(d.err()) << a;
+      armd |= uint32_t(d.idx_armed()) << a;
+      seen |= uint32_t(d.idx_seen()) << a;
+      den |= uint32_t(u_core.drv_en(a)) << a;
+      pen |= uint32_t(pid.enabled(a)) << a;
+    }
+    ri.enc_err = uint8_t(err);
+    ri.enc_idx_armed = uint8_t(armd);
+    ri.enc_idx_seen = uint8_t(seen);
+    ri.drv_en = uint8_t(den);
+    ri.pid_en = uint8_t(pen);
+    const int ra = rr.ra >> 4 & 3;
+    if (ra < NAXES) {
+      const auto& d = u_core.decoder(ra);
+      ri.enc_err_cnt[ra] = uint16_t(d.err_cnt());
+      ri.enc_idx_pos[ra] = uint32_t(d.idx_pos());
+      ri.drv_sel[ra] = armed ? uint16_t(u_core.drv_cmd(ra)) : 0;  // drv_allow low selects 0
+    }
+    ri.done = pid.done();
+    ri.smp_rdata = u_core.smp_rdata();
+    ri.hw_pos = HANDWHEEL ? uint32_t(u_hw.pos()) : 0;
+    s.enc_err = ri.enc_err;
+    s.kick = u_regs.kick_o(ri);
+    ri.estop_act = u_safety.estop_act_o(s);
+    ri.lim_act = u_safety.lim_act_o(s);
+
+    // link_tx: the register file's words and header fields.
+    LinkTxIn& t = w.ltx;
+    t.rst = in.rst;
+    t.we = u_regs.tx_we_o();
+    t.waddr = u_regs.tx_waddr_o();
+    t.wdata = u_regs.tx_wdata_o(ri);
+    t.start = rr.tx_start_o;
+    t.seq = rr.tx_seq_o;
+    t.cmd = rr.tx_cmd_o;
+    t.status_en = rr.tx_status_en_o;
+    t.status = rr.tx_status_o;
+    t.wbase = rr.tx_wbase_o;
+    t.nwords = rr.tx_nwords_o;
+    t.ready = u_utx.ready_o();
+
+    // Handwheel.
+    QuadIn& h = w.hw;
+    h.rst = in.rst;
+    h.filt_len = rr.hw_filt_o;
+    h.dir_inv = rr.hw_dir_inv_o;
+    h.pos_load = rr.hw_load_o;
+    h.pos_load_val = int32_t(data);
+    h.a = in.hw_a;
+    h.b = in.hw_b;
+  }
+
+  // Kept from clock to clock rather than built anew (every field read is
+  // written by wires()).
+  Wires w_;
+  MotionIn<NAXES> core_in_;
+  bool regs_changed_ = true;  // the register file's last clock may have changed its outputs
+};
+
+}  // namespace mc

@@ -1,0 +1,154 @@
+// motioncore_icebreaker twin: the whole iCEBreaker board at its pins, clock
+// by clock. Mirrors rtl/motioncore_icebreaker.v: the power-on reset, the
+// two-flop synchronizers of every input but the encoders, the active-low
+// LEDs, and under them the board core (hls/mc_board.hpp). For the same pin
+// levels every clock it gives the RTL's TX, LED and drive pins bit for bit,
+// from the same clock on (the RTL powers up at random; its reset makes the
+// difference unobservable).
+//
+// How to drive it:
+//   MotioncoreIcebreaker<> b;       // power-up: reset runs for 15 clocks
+//   IcebreakerPins p;               // RX idle high, button up, all else low
+//   each clock: set p; b.step(p); read b.tx(), b.pwm(a), ... (the pins after the edge)
+// A host link at BAUD bit/s moves p.rx; encoders, limits, e-stop and the
+// button move their pins. For long stretches with the pins held,
+// run(p, n) does n clocks exactly as n step(p) would, but skips at once
+// the clocks in which only counters move (idle_clocks/advance): the UART
+// idle, no frame being worked on, no PID sample due, no timer expiring.
+// PWM and LED pins keep following their counters inside such a stretch.
+//
+// Synthesizable subset: fixed-width integers, no heap, static loop bounds.
+#pragma once
+
+#include <cstdint>
+
+#include "mc_board.hpp"
+
+namespace mc {
+
+// The board's input pins (rtl/motioncore_icebreaker.v's names; per axis
+// [0] X, [1] Y, [2] Z).
+struct IcebreakerPins {
+  bool rx = true;      // RX: FTDI UART, idles high
+  bool btn_n = true;   // BTN_N: the user button, low when pressed (a local stop)
+  bool estop = false;  // ESTOP
+  bool enc_a[3] = {}, enc_b[3] = {}, enc_z[3] = {};  // X_ENC_A, ...
+  bool lim[3] = {};                                  // X_LIM, ...
+  bool hw_a = false, hw_b = false;                   // HW_A, HW_B: the handwheel
+};
+
+template <int NAXES = 3, int CLK_HZ = 12'000'000, int BAUD = 1'000'000, bool HANDWHEEL = true>
+class MotioncoreIcebreaker {
+  static_assert(NAXES >= 1 && NAXES <= 3, "motioncore_icebreaker: NAXES must be 1..3");
+
+ public:
+  using Board = McBoard<NAXES, 9, 9, 4, CLK_HZ, BAUD, HANDWHEEL>;
+  static constexpr int NS = 3 + NAXES;  // synchronized inputs: {RX, button, e-stop, limits}
+
+  uint8_t por = 0;         // power-on reset counter, 4 bits
+  uint8_t s1 = 0, s2 = 0;  // the synchronizers, NS bits
+  Board u_board;
+
+  bool rst() const { return por != 15; }
+
+  // The output pins after the last edge.
+  bool tx() const { return u_board.tx_o(); }
+  bool pwm(int a) const { return a < NAXES && u_board.pwm_o(a); }
+  bool dir(int a) const { return a < NAXES && u_board.dir_o(a); }
+  bool en(int a) const { return a < NAXES && u_board.drv_en_o(a); }
+  bool ledr_n() const { return !u_board.led_fault_o(); }
+  bool ledg_n() const { return !u_board.led_ok_o(); }
+  // After how many of the next n edges axis a's PWM pin is high, when
+  // advance(p, n) does them (the drive holds; EN and DIR keep their level).
+  uint32_t pwm_high_in(int a, uint32_t n) const { return a < NAXES ? u_board.u_core.pwm_high_in(a, n) : 0; }
+
+  // One rising clock edge with these pin levels.
+  void step(const IcebreakerPins& p) {
+    u_board.clock(board_in(p));
+    s2 = s1;
+    s1 = sync_in(p);
+    if (rst()) por = uint8_t(por + 1);
+    idle_ = 0;
+  }
+
+  // How many of the next clocks (up to limit) with these pins held change
+  // nothing but counters and timers; advance(p, n) does n <= that many at
+  // once, leaving exactly the state n step(p) would leave.
+  uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) {
+    const uint32_t w = pins_word(p);
+    if (idle_ == 0 || w != idle_pins_) {  // else: what is left of the stretch found before
+      idle_pins_ = w;
+      idle_ = rst() || s1 != sync_in(p) || s2 != s1 ? 0 : u_board.quiet(board_in(p), 0xFFFFFFFFu);
+    }
+    return idle_ < limit ? idle_ : limit;
+  }
+  void advance(const IcebreakerPins& p, uint32_t n) {
+    u_board.skip(n);
+    idle_ = pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
+  }
+
+  // n clocks with these pins held: step(p) where something happens,
+  // advance() over the rest. Returns how many clocks were skipped.
+  // on_step(i) is called after each clock stepped, i the clocks done so far
+  // in this call (that one included). TX changes only in stepped clocks, so
+  // a host that decodes the line reads tx() there and knows when it changed.
+  template <typename OnStep>
+  uint64_t run(const IcebreakerPins& p, uint64_t n, OnStep&& on_step) {
+    uint64_t skipped = 0, done = 0;
+    while (done < n) {
+      const uint64_t left = n - done;
+      const uint32_t k = idle_clocks(p, left > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(left));
+      if (k > 0) {
+        advance(p, k);
+        skipped += k;
+        done += k;
+      } else {
+        step(p);
+        on_step(++done);
+      }
+    }
+    return skipped;
+  }
+  uint64_t run(const IcebreakerPins& p, uint64_t n) {
+    return run(p, n, [](uint64_t) {});
+  }
+
+ private:
+  uint8_t sync_in(const IcebreakerPins& p) const {
+    uint32_t v = uint32_t(p.rx) << (NS - 1) | uint32_t(!p.btn_n) << (NAXES + 1) | uint32_t(p.estop) << NAXES;
+    for (int a = 0; a < NAXES; ++a) v |= uint32_t(p.lim[a]) << a;
+    return uint8_t(v);
+  }
+  McBoardIn board_in(const IcebreakerPins& p) const {
+    McBoardIn b;
+    b.rst = rst();
+    b.rx = s2 >> (NS - 1) & 1;
+    b.stop = s2 >> (NAXES + 1) & 1;
+    b.estop = s2 >> NAXES & 1;
+    b.lim = uint8_t(s2 & ((1u << NAXES) - 1));
+    for (int a = 0; a < NAXES; ++a) {
+      b.enc_a = uint8_t(b.enc_a | uint32_t(p.enc_a[a]) << a);
+      b.enc_b = uint8_t(b.enc_b | uint32_t(p.enc_b[a]) << a);
+      b.enc_z = uint8_t(b.enc_z | uint32_t(p.enc_z[a]) << a);
+    }
+    b.hw_a = p.hw_a;
+    b.hw_b = p.hw_b;
+    return b;
+  }
+  static uint32_t pins_word(const IcebreakerPins& p) {
+    uint32_t w = uint32_t(p.rx) | uint32_t(p.btn_n) << 1 | uint32_t(p.estop) << 2 | uint32_t(p.hw_a) << 3 |
+                 uint32_t(p.hw_b) << 4;
+    for (int a = 0; a < 3; ++a)
+      w |= (uint32_t(p.enc_a[a]) | uint32_t(p.enc_b[a]) << 1 | uint32_t(p.enc_z[a]) << 2 |
+            uint32_t(p.lim[a]) << 3)
+           << (5 + 4 * a);
+    return w;
+  }
+
+  // The idle stretch found last (a stretch stays idle to its end while the
+  // pins hold): clocks left, and the pins it was found with. A test that
+  // writes registers by hand steps a clock before it advances again.
+  uint32_t idle_ = 0, idle_pins_ = 0;
+};
+
+}  // namespace mc

@@ -1,0 +1,129 @@
+#include "sim/vboard/board_model.hpp"
+
+#include "Vmotioncore_icebreaker.h"
+#include "verilated.h"
+
+namespace mc::sim {
+namespace {
+
+// The twin: stepped where something happens, advanced over the rest.
+class TwinBoard final : public BoardModel {
+ public:
+  uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive) override {
+    const uint32_t n = b_.idle_clocks(p, limit);
+    if (n > 0) {
+      // EN and DIR hold through the stretch; PWM follows its counter.
+      for (int a = 0; a < kBoardAxes; ++a)
+        if (b_.en(a)) {
+          const int32_t high = int32_t(b_.pwm_high_in(a, n));
+          drive[a] += b_.dir(a) ? -high : high;
+        }
+      b_.advance(p, n);
+      return n;
+    }
+    b_.step(p);
+    ++stepped_;
+    for (int a = 0; a < kBoardAxes; ++a)
+      if (b_.en(a) && b_.pwm(a)) drive[a] += b_.dir(a) ? -1 : 1;
+    return 1;
+  }
+  bool tx() const override { return b_.tx(); }
+  bool en(int axis) const override { return b_.en(axis); }
+  uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) override { return b_.idle_clocks(p, limit); }
+  int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
+    if (!b_.en(a)) return 0;
+    const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
+    return b_.dir(a) ? -high : high;
+  }
+  void advance(const IcebreakerPins& p, uint32_t n) override { b_.advance(p, n); }
+
+ private:
+  MotioncoreIcebreaker<kBoardAxes> b_;
+};
+
+// The Verilated top, one clock per call; the harness writes only the input
+// ports whose level changed.
+class RtlBoard final : public BoardModel {
+ public:
+  explicit RtlBoard(uint32_t seed) {
+    ctx_ = std::make_unique<VerilatedContext>();
+    // An iCE40 configures every flip-flop and block RAM to zero; a seed
+    // asks for Verilator's random power-up state instead.
+    ctx_->randReset(seed ? 2 : 0);
+    ctx_->randSeed(int(seed & 0x7fffffff));
+    top_ = std::make_unique<Vmotioncore_icebreaker>(ctx_.get(), "board");
+    Vmotioncore_icebreaker& t = *top_;
+    enc_[0] = {&t.X_ENC_A, &t.X_ENC_B, &t.X_ENC_Z, &t.X_LIM};
+    enc_[1] = {&t.Y_ENC_A, &t.Y_ENC_B, &t.Y_ENC_Z, &t.Y_LIM};
+    enc_[2] = {&t.Z_ENC_A, &t.Z_ENC_B, &t.Z_ENC_Z, &t.Z_LIM};
+    drv_[0] = {&t.X_PWM, &t.X_DIR, &t.X_EN};
+    drv_[1] = {&t.Y_PWM, &t.Y_DIR, &t.Y_EN};
+    drv_[2] = {&t.Z_PWM, &t.Z_DIR, &t.Z_EN};
+    t.CLK = 0;
+    write_all(last_);
+    t.eval();
+  }
+  ~RtlBoard() override { top_->final(); }
+
+  uint32_t run(const IcebreakerPins& p, uint32_t /*limit*/, int32_t* drive) override {
+    Vmotioncore_icebreaker& t = *top_;
+    if (!same(p, last_)) {
+      write_all(p);
+      last_ = p;
+    }
+    t.CLK = 1;
+    t.eval();
+    t.CLK = 0;
+    t.eval();
+    ++stepped_;
+    for (int a = 0; a < kBoardAxes; ++a)
+      if (*drv_[a].en && *drv_[a].pwm) drive[a] += *drv_[a].dir ? -1 : 1;
+    return 1;
+  }
+  bool tx() const override { return top_->TX; }
+  bool en(int axis) const override { return *drv_[axis].en; }
+
+ private:
+  struct EncPorts {
+    uint8_t *a, *b, *z, *lim;
+  };
+  struct DrvPorts {
+    const uint8_t *pwm, *dir, *en;
+  };
+  static bool same(const IcebreakerPins& x, const IcebreakerPins& y) {
+    for (int a = 0; a < kBoardAxes; ++a)
+      if (x.enc_a[a] != y.enc_a[a] || x.enc_b[a] != y.enc_b[a] || x.enc_z[a] != y.enc_z[a] ||
+          x.lim[a] != y.lim[a])
+        return false;
+    return x.rx == y.rx && x.btn_n == y.btn_n && x.estop == y.estop && x.hw_a == y.hw_a && x.hw_b == y.hw_b;
+  }
+  void write_all(const IcebreakerPins& p) {
+    Vmotioncore_icebreaker& t = *top_;
+    t.RX = p.rx;
+    t.BTN_N = p.btn_n;
+    t.ESTOP = p.estop;
+    t.HW_A = p.hw_a;
+    t.HW_B = p.hw_b;
+    for (int a = 0; a < kBoardAxes; ++a) {
+      *enc_[a].a = p.enc_a[a];
+      *enc_[a].b = p.enc_b[a];
+      *enc_[a].z = p.enc_z[a];
+      *enc_[a].lim = p.lim[a];
+    }
+  }
+
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<Vmotioncore_icebreaker> top_;
+  EncPorts enc_[kBoardAxes]{};
+  DrvPorts drv_[kBoardAxes]{};
+  IcebreakerPins last_;
+};
+
+}  // namespace
+
+std::unique_ptr<BoardModel> make_board_model(BoardEngine e, uint32_t seed) {
+  if (e == BoardEngine::Rtl) return std::make_unique<RtlBoard>(seed);
+  return std::make_unique<TwinBoard>();
+}
+
+}  // namespace mc::sim

@@ -1,0 +1,51 @@
+// The board the virtual board clocks, behind one interface: the board twin
+// (hls/motioncore_icebreaker.hpp), which skips the clocks in which only
+// counters move, or the Verilated board top, clock by clock, for proof.
+// Both see the same pins and give the same TX and drive pins every clock
+// (tests/test_board_twin.cpp; tests/test_vboard.cpp holds the two virtual
+// boards to each other).
+//
+//   auto b = make_board_model(BoardEngine::Twin, 0);
+//   n = b->run(pins, limit, drive);   // 1..limit clocks with the pins held
+//   b->tx();                          // the TX pin, held through those clocks
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "hls/motioncore_icebreaker.hpp"
+#include "sim/vboard/virtual_board.hpp"
+
+namespace mc::sim {
+
+class BoardModel {
+ public:
+  virtual ~BoardModel() = default;
+  // At least one and at most `limit` clocks with the pins p held: one
+  // stepped clock, or a stretch in which nothing but counters change (TX,
+  // EN and DIR hold). drive[a] gains, per clock, +1 (-1 with DIR) after
+  // each edge that leaves axis a's bridge on (EN and PWM high). Returns the
+  // clocks done.
+  virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive) = 0;
+  // The output pins after the last edge.
+  virtual bool tx() const = 0;
+  virtual bool en(int axis) const = 0;
+  // The twin's fast-forward over many plant steps (the RTL: none): how many
+  // of the next clocks (up to limit) with the pins held change nothing but
+  // counters; the drive of axis a over the clocks [from, from + n) of such a
+  // stretch (as run() counts it); advance(p, n) does n of them at once.
+  virtual uint32_t idle_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/) { return 0; }
+  virtual int32_t idle_drive(int /*axis*/, uint32_t /*from*/, uint32_t /*n*/) const { return 0; }
+  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/) {}
+  // Clocks stepped one by one so far (the rest were skipped).
+  uint64_t stepped() const { return stepped_; }
+
+ protected:
+  uint64_t stepped_ = 0;
+};
+
+// seed != 0: the RTL's random power-up state, seeded (the twin powers up
+// at zero: its reset makes the difference unobservable at the pins).
+std::unique_ptr<BoardModel> make_board_model(BoardEngine e, uint32_t seed);
+
+}  // namespace mc::sim

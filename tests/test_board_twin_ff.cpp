@@ -1,0 +1,174 @@
+// The running interpolator's fast-forward (InterpCore::run_quiet/skip_run,
+// and MotionCore's skip while a segment runs) against clocking every clock:
+// random lines, arcs and dwells at random feeds, with feed holds and clears
+// now and then; the skipping twin and the clocked one must agree on the
+// position command, the feed phase and the queue after every skip and every
+// clock, and end together. The co-simulation and the board twin rest on it
+// (Cosim.TwinAndRtlGiveIdenticalOutputs and BoardTwin.* check it further
+// against the RTL).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "hls/interp_core.hpp"
+#include "hls/motion_core.hpp"
+#include "interp_bench.hpp"
+
+namespace mc::test {
+namespace {
+
+using Interp = InterpCore<9>;
+
+void expect_same(const Interp& a, const Interp& b, uint64_t clock) {
+  ASSERT_EQ(a.state(), b.state()) << "clock " << clock;
+  ASSERT_EQ(a.phase(), b.phase()) << "clock " << clock;
+  for (int x = 0; x < 3; ++x) ASSERT_EQ(a.pos(x), b.pos(x)) << "axis " << x << ", clock " << clock;
+  ASSERT_EQ(a.count(), b.count()) << "clock " << clock;
+  ASSERT_EQ(a.seg_cnt(), b.seg_cnt()) << "clock " << clock;
+  ASSERT_EQ(a.underrun(), b.underrun()) << "clock " << clock;
+}
+
+TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
+  uint64_t all_skipped = 0, all_clocks = 0;
+  for (uint64_t seed : {11, 12, 13, 14}) {
+    std::mt19937_64 rng(seed);
+    SegGen gen(seed);
+    // Slow feeds as well: long stretches without an iteration are what the
+    // fast-forward skips; fast ones reach the rate that fires every tick.
+    gen.min_rate = seed == 14 ? 0.5 : 0.001;
+    gen.max_rate = seed == 14 ? 1.0 : 0.05;
+    gen.max_line = 40;
+    gen.max_radius = 30;
+    Interp ref, fast;
+    ref.reset();
+    fast.reset();
+    Vec3 at{0, 0, 0};
+    std::vector<uint32_t> words;
+    int queued = 0;
+    uint64_t clock = 0, skipped = 0;
+    while (queued < 60 || ref.busy() || ref.count() > 0 || !words.empty()) {
+      InterpIn in;
+      if (words.empty() && queued < 60 && ref.count() < 3 * seg::SEG_WORDS) {
+        const PlannedSegment p = gen.any(at);
+        at = p.end;
+        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+        ++queued;
+      }
+      // Words go in now and then, not every clock: the engine runs between.
+      if (!words.empty() && rng() % 8 == 0) {
+        in.wr = true;
+        in.wdata = words.front();
+        words.erase(words.begin());
+      }
+      in.hold = rng() % 20000 < 3;
+      in.clr = rng() % 50000 == 0;
+      const uint32_t q = fast.run_quiet(in);
+      if (q > 0 && !in.wr) {
+        const uint32_t n = rng() % 4 ? q : 1 + uint32_t(rng() % q);
+        for (uint32_t i = 0; i < n; ++i) ref.clock(in);
+        fast.skip_run(n);
+        clock += n;
+        skipped += n;
+      } else {
+        ref.clock(in);
+        fast.clock(in);
+        ++clock;
+      }
+      expect_same(ref, fast, clock);
+      if (HasFatalFailure()) return;
+      ASSERT_LT(clock, 400'000'000u) << "seed " << seed << ": the segments never finished";
+    }
+    std::printf("seed %llu: %llu clocks, %llu of them skipped, %d segments\n", (unsigned long long)seed,
+                (unsigned long long)clock, (unsigned long long)skipped, queued);
+    if (seed != 14) {
+      EXPECT_GT(skipped, clock / 2) << "seed " << seed;
+    }
+    all_skipped += skipped;
+    all_clocks += clock;
+  }
+  EXPECT_GT(all_skipped, all_clocks / 2);
+}
+
+// The motion core with a running interpolator: quiet()/skip() against
+// clock(), the PID closing the loop on a still encoder.
+TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
+  using Core = MotionCore<2>;
+  for (uint64_t seed : {21, 22}) {
+    std::mt19937_64 rng(seed);
+    SegGen gen(seed);
+    gen.min_rate = 0.001;
+    gen.max_rate = 0.03;
+    gen.max_line = 30;
+    gen.max_radius = 20;
+    gen.planes = false;
+    Core ref, fast;
+    Core::In in;
+    in.rst = true;
+    for (int i = 0; i < 3; ++i) {
+      ref.clock(in);
+      fast.clock(in);
+    }
+    in.rst = false;
+    // Gains, Ts = 200 clocks, both axes enabled.
+    const std::pair<uint8_t, uint32_t> cfg[] = {{0x00, (1u << 20) | (16u << 24)},
+                                                {0x10, (1u << 20) | (16u << 24)},
+                                                {0x0F, 1},
+                                                {0x1F, 1},
+                                                {0xF0, 200}};
+    for (const auto& [addr, data] : cfg) {
+      in.pid_we = true;
+      in.pid_waddr = addr;
+      in.pid_wdata = data;
+      while (!ref.outputs(true).pid_wready) {
+        ref.clock(in);
+        fast.clock(in);
+      }
+      ref.clock(in);
+      fast.clock(in);
+    }
+    in.pid_we = false;
+    in.drv_allow[0] = in.drv_allow[1] = true;
+    Vec3 at{0, 0, 0};
+    std::vector<uint32_t> words;
+    for (int s = 0; s < 20; ++s) {
+      const PlannedSegment p = gen.any(at);
+      at = p.end;
+      for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+    }
+    uint64_t clock = 0, skipped = 0;
+    while ((!words.empty() || ref.interp().busy() || ref.interp().count() > 0) && clock < 200'000'000) {
+      in.seg_wr = !words.empty() && rng() % 4 == 0 && ref.interp().count() < 300;
+      in.seg_wdata = in.seg_wr ? words.front() : 0;
+      if (in.seg_wr) words.erase(words.begin());
+      const uint32_t lim = fast.quiet_limit();
+      const uint32_t n = lim == 0 ? 0 : (rng() % 3 ? lim : 1 + uint32_t(rng() % lim));
+      if (n > 0 && fast.quiet(in, n)) {
+        for (uint32_t i = 0; i < n; ++i) ref.clock(in);
+        fast.skip(n);
+        clock += n;
+        skipped += n;
+      } else {
+        ref.clock(in);
+        fast.clock(in);
+        ++clock;
+      }
+      const auto a = ref.outputs(), b = fast.outputs();
+      for (int x = 0; x < 2; ++x) {
+        ASSERT_EQ(a.cmd[x], b.cmd[x]) << "clock " << clock;
+        ASSERT_EQ(a.drv_u[x], b.drv_u[x]) << "clock " << clock;
+        ASSERT_EQ(a.pwm[x], b.pwm[x]) << "clock " << clock;
+      }
+      ASSERT_EQ(a.seg_count, b.seg_count) << "clock " << clock;
+      ASSERT_EQ(a.ip_seg_cnt, b.ip_seg_cnt) << "clock " << clock;
+      ASSERT_EQ(ref.interp().phase(), fast.interp().phase()) << "clock " << clock;
+    }
+    ASSERT_FALSE(ref.interp().busy()) << "seed " << seed << ": the segments never finished";
+    std::printf("seed %llu: %llu clocks, %llu of them skipped\n", (unsigned long long)seed,
+                (unsigned long long)clock, (unsigned long long)skipped);
+    EXPECT_GT(skipped, clock / 2) << "seed " << seed;
+  }
+}
+
+}  // namespace
+}  // namespace mc::test
