@@ -57,8 +57,11 @@ struct AxisConfig {
   int encoder_cpr;        // counts per motor revolution after 4x decoding
   DriveConfig drive;
   PidConfig pid;
-  double max_following_error_m;
-  double max_speed_m_s;
+  double max_following_error_m;  // armed on the board's FERR whenever motionctl arms the drives
+  double max_speed_m_s;          // jog, move and the planner refuse feeds above it
+  // Soft travel limits, machine coordinates (m from where the axis was when
+  // the board started); optional keys, default the board's 32-bit range.
+  double travel_min_m = 0, travel_max_m = 0;
 };
 
 struct MachineConfig {
