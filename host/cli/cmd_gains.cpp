@@ -99,9 +99,11 @@ void set(const GainsOptions& o) {
       throw InputError("--limit", quote(o.limit), "drive units 0..32767 (0: none)");
     cur.limits.out_limit = uint32_t(std::lround(lim));
   }
+  const GainNames names{"--ts", o.ts, "--kp", o.kp};
+  check_gains(l, g, names);  // before the warning: a refused Ts changes nothing
   if ((!o.ts.empty() || o.defaults) && ts_change_affects_other_axes(l, a, g.ts))
     warn("Ts is shared by every axis: the other axes' gains now run at the new period (set them again)");
-  const AxisGains now = apply_gains(l, a, g, cur.limits, warn);
+  const AxisGains now = apply_gains(l, a, g, cur.limits, warn, names);
   if (o.json)
     std::cout << gains_json(a, now).dump(2) << '\n';
   else {

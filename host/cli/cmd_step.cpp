@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -20,6 +21,7 @@
 #include "host/control/board_experiments.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -72,13 +74,25 @@ void step(const StepOptions& o) {
   const double duration = parse_duration(o.duration, "--duration");
   if (duration > 10) throw InputError("--duration", quote(o.duration), "at most 10 s");
   const double cpm = machine_scale(a0, o.axis);
+  if (!(std::fabs(mm * 1e-3 * cpm) < 2147483647.0))
+    throw InputError("--size", quote(o.size), "a step within the board's 32-bit positions");
   const int32_t counts = int32_t(std::llround(mm * 1e-3 * cpm));
   if (counts == 0) throw InputError("--size", quote(o.size), "a step of at least one encoder count");
+  // The outputs and the machine's limits, before the board is touched.
+  if (!o.csv.empty()) require_writable_file(o.csv, "--csv");
+  if (!o.plot.empty()) require_writable_file(o.plot, "--plot");
+  const mc::machine::MachineConfig m = machine();
+  const mc::machine::Asked asked{"--size", o.size};
+  const uint32_t ferr = mc::machine::step_ferr_counts(m, a0, counts, asked);
   Board b = open_board();
   BoardLink& l = *b.link;
   const int a = board_axis(l, o.axis);
+  const Vec3 from = start_position(l);
+  Vec3 to = from;
+  to[size_t(a)] += counts;
+  mc::machine::check_travel(m, from, to, asked);
   catch_interrupts();
-  const StepCapture c = capture_step(l, a, counts, duration, note);
+  const StepCapture c = capture_step(l, a, counts, duration, note, ferr);
   if (!o.csv.empty()) write_step_csv(o.csv, c);
   if (!o.plot.empty()) write_step_plot(o.plot, c, cpm);
   if (o.json) {
