@@ -175,8 +175,7 @@ void jog(const MotionOptions& o) {
 void move(const MotionOptions& o) {
   std::vector<double> mm;
   std::stringstream ss(o.target);
-  for (std::string part; std::getline(ss, part, ',');)
-    mm.push_back(parse_number(part, "target"));
+  for (std::string part; std::getline(ss, part, ',');) mm.push_back(parse_number(part, "target"));
   if (mm.size() < 2 || mm.size() > 3) throw InputError("target", quote(o.target), "X,Y or X,Y,Z in mm");
   const auto sc = axis_scales();
   for (size_t a = 0; a < mm.size(); ++a)
@@ -206,7 +205,8 @@ void add_board_commands(CLI::App& app) {
       "\nThe watchdog turns the drives off one WDOG period (100 ms by default) after the last frame, so\n"
       "they go off when this command exits: the intended safety behaviour. jog and move arm again.");
   CLI::Option* eaxis =
-      en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")->type_name("AXIS");
+      en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")
+          ->type_name("AXIS");
   auto ejson = std::make_shared<bool>(false);
   en->add_flag("--json", *ejson, "One JSON object");
   en->callback([axis, eaxis, ejson] {
@@ -218,7 +218,8 @@ void add_board_commands(CLI::App& app) {
   CLI::App* dis = app.add_subcommand("disable", "Disable the PID of an axis; without --axis also disarm");
   dis->footer(kBoardFooter);
   CLI::Option* daxis_opt =
-      dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")->type_name("AXIS");
+      dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")
+          ->type_name("AXIS");
   auto djson = std::make_shared<bool>(false);
   dis->add_flag("--json", *djson, "One JSON object");
   dis->callback([daxis, daxis_opt, djson] {

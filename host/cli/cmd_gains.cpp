@@ -45,6 +45,7 @@ nlohmann::ordered_json gains_json(int axis, const AxisGains& g) {
   j["ff2"] = g.gains.ff2;
   j["out_limit"] = g.limits.out_limit;
   j["int_limit"] = g.limits.int_limit;
+  j["following_error_limit_counts"] = g.ferr;
   j["words"] = g.words;
   return j;
 }

@@ -7,9 +7,9 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <thread>

@@ -85,7 +85,8 @@ AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimit
   const uint16_t ts_addr = pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS);
   const uint32_t old_ts = l.read(ts_addr);
   std::array<uint32_t, pid_reg::NREGS_RAM> old{};
-  for (int r = 0; r < pid_reg::NREGS_RAM; ++r) old[size_t(r)] = l.read(pid_reg::addr(uint8_t(axis), uint8_t(r)));
+  for (int r = 0; r < pid_reg::NREGS_RAM; ++r)
+    old[size_t(r)] = l.read(pid_reg::addr(uint8_t(axis), uint8_t(r)));
   try {
     if (old_ts != cycles) l.write_verify(ts_addr, cycles);
     write_gains(l, axis, d, lim);
@@ -98,8 +99,8 @@ AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimit
         l.write_verify(pid_reg::addr(uint8_t(axis), uint8_t(r)), old[size_t(r)]);
       left = "restored the previous Ts and gains";
     } catch (const std::exception& r) {
-      left = "could not restore the previous Ts (" + std::to_string(old_ts) + " cycles) and gains: " + r.what() +
-             "; check with 'motionctl gains show'";
+      left = "could not restore the previous Ts (" + std::to_string(old_ts) +
+             " cycles) and gains: " + r.what() + "; check with 'motionctl gains show'";
     }
     throw BoardError(std::string(e.what()) + "; " + left);
   }

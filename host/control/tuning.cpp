@@ -509,8 +509,9 @@ double max_bandwidth(double ts) {
 }
 
 double check_bandwidth(double wc, double ts, std::string_view quantity, std::string_view as_written) {
-  if (!(wc > 0)) throw InputError(std::string(quantity), as_written.empty() ? format_number(wc) : quote(as_written),
-                                  "rad/s above 0");
+  if (!(wc > 0))
+    throw InputError(std::string(quantity), as_written.empty() ? format_number(wc) : quote(as_written),
+                     "rad/s above 0");
   return require_in(wc, Bounds{0, max_bandwidth(ts), "rad/s"}, quantity, as_written,
                     "the Nyquist frequency pi/Ts at the board's Ts " + format_duration(ts));
 }

@@ -30,8 +30,8 @@ void check_travel(const MachineConfig& m, const mc::host::Vec3& from, const mc::
 // axis exceeds its max_speed_m_s, mm/min; 0 when nothing moves.
 double max_feed_mm_min(const MachineConfig& m, const mc::host::Vec3& from, const mc::host::Vec3& to);
 // InputError unless 0 < feed <= max_feed_mm_min(m, from, to).
-void check_feed(const MachineConfig& m, const mc::host::Vec3& from, const mc::host::Vec3& to, double feed_mm_min,
-                const Asked& asked);
+void check_feed(const MachineConfig& m, const mc::host::Vec3& from, const mc::host::Vec3& to,
+                double feed_mm_min, const Asked& asked);
 
 // The board's following-error limit of each axis, counts (0 for an axis the
 // machine lacks): max_following_error_m at the axis' scale, at least 1.
