@@ -13,3 +13,7 @@ target_link_libraries(test_gcode_interp PRIVATE mc_gcode)
 
 mc_gtest(test_gcode_properties unit test_gcode_properties.cpp)
 target_link_libraries(test_gcode_properties PRIVATE mc_gcode)
+
+# The path planner (host/motion/planner) and the job (host/machine/job).
+mc_gtest(test_planner unit test_planner.cpp)
+target_link_libraries(test_planner PRIVATE mc_machine)

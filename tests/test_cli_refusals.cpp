@@ -45,10 +45,13 @@ json board_state() {
   for (const auto& f : s["faults"])
     if (f != "watchdog") faults.push_back(f);
   out["faults"] = faults;
+  // Positions of the horizontal axes only: z's carriage sinks under its
+  // weight whenever the watchdog has turned its drive off.
   for (const auto& a : s["axes"])
-    out["axes"].push_back(
-        {{"command", a["command"]}, {"position", a["position"]}, {"enabled", a["enabled"]}});
-  for (const char* axis : {"x", "y"}) {
+    out["axes"].push_back({{"command", a["command"]},
+                           {"position", a["axis"] == "z" ? json() : a["position"]},
+                           {"enabled", a["enabled"]}});
+  for (const char* axis : {"x", "y", "z"}) {
     const json g = run_json(sim({"gains", "show", "--axis", axis, "--json"}));
     out["gains"][axis] = {{"words", g["words"]},
                           {"ts", g["ts"]},
@@ -86,9 +89,11 @@ TEST(CliRefusals, EachBadInputIsRefusedAndTheBoardIsUnchanged) {
   PrivateRuntimeDir rt;
   expect_ok(sim({"gains", "set", "--axis", "x", "--defaults"}));
   expect_ok(sim({"gains", "set", "--axis", "y", "--defaults"}));
+  expect_ok(sim({"gains", "set", "--axis", "z", "--defaults"}));
   expect_ok(sim({"enable"}));
   const json before = board_state();
   ASSERT_EQ(before["gains"]["x"]["ferr"], 400) << "1 mm of the default machine at 400 counts/mm";
+  ASSERT_EQ(before["gains"]["z"]["ferr"], 400);
   const std::string dir = temp_dir();
   const struct {
     std::vector<std::string> args;
@@ -102,14 +107,18 @@ TEST(CliRefusals, EachBadInputIsRefusedAndTheBoardIsUnchanged) {
       {{"gains", "set", "--axis", "y", "--ki", "1e30"}, "too large for the coefficient word"},
       // Travel and speed, before the drives are armed.
       {{"jog", "--axis", "x", "--distance", "1e9", "--feed", "600"}, "axis x would end at 1000000000 mm"},
-      {{"jog", "--axis", "x", "--distance", "-150.01", "--feed", "600"}, "within axis x's travel"},
+      {{"jog", "--axis", "x", "--distance", "-300.01", "--feed", "600"}, "within axis x's travel"},
+      {{"jog", "--axis", "z", "--distance", "200", "--feed", "600"}, "within axis z's travel -100 mm..20 mm"},
       {{"move", "1e9,0", "--feed", "600"}, "within axis x's travel"},
       {{"move", "0,-1e300", "--feed", "600"}, "within axis y's travel"},
       {{"jog", "--axis", "x", "--distance", "1", "--feed", "1e5"}, "--feed = \"1e5\": above the range"},
+      {{"jog", "--axis", "z", "--distance", "-1", "--feed", "15001"},
+       "max_speed_m_s of the moving axes: z 0.25"},
       {{"move", "10,10", "--feed", "42427"}, "0..42426.40687 mm/min"},
+      {{"hostloop", "--axis", "x", "--distance", "1e9"}, "within axis x's travel"},
       // A step: within FERR's 16 bits with its margin, and within travel.
       {{"step", "--axis", "x", "--size", "1000"}, "16-bit FERR"},
-      {{"step", "--axis", "x", "--size", "160"}, "within axis x's travel"},
+      {{"step", "--axis", "z", "--size", "50"}, "within axis z's travel"},
       // Outputs checked before the capture.
       {{"step", "--axis", "x", "--csv", dir + "/no/such/dir/s.csv"}, "--csv"},
       {{"step", "--axis", "x", "--plot", dir}, "--plot"},
@@ -136,6 +145,9 @@ TEST(CliRefusals, FollowingErrorLimitIsArmedFromTheMachine) {
   EXPECT_EQ(st["faults"], "none");
   EXPECT_LT(double(st["metrics"]["overshoot_pct"]), 50);
   EXPECT_EQ(run_json(sim({"gains", "show", "--axis", "x", "--json"}))["following_error_limit_counts"], 400);
+  // z's PID is off: nothing holds its carriage, which sinks under its weight,
+  // so its limit is off too (a following error there is no runaway).
+  EXPECT_EQ(run_json(sim({"gains", "show", "--axis", "z", "--json"}))["following_error_limit_counts"], 0);
   // A runaway: a loop too weak to follow 50 mm at 20 m/min. The fault stops
   // it at the limit instead of letting the error grow.
   expect_ok(sim({"gains", "set", "--axis", "x", "--kp", "0.05", "--ki", "0", "--kd", "0"}));

@@ -159,27 +159,33 @@ namespace {
 
 using mc::host::Vec3;
 
-// The default machine: x and y at 400 000 counts/m, travel -150..150 mm,
-// 0.5 m/s, following error 1 mm = 400 counts.
+// The default machine: x, y and z at 400 000 counts/m; x and y travel
+// -300..300 mm at 0.5 m/s, z -100..20 mm at 0.25 m/s; following error 1 mm
+// = 400 counts.
 const MachineConfig& m() {
   static const MachineConfig c = default_machine();
   return c;
 }
 
 TEST(MachineLimits, TravelIsCheckedOnEveryAxisOfTheTarget) {
-  check_travel(m(), {0, 0, 0}, {60000, -60000, 0}, {"target", "150,-150"});  // the edges
+  check_travel(m(), {0, 0, 0}, {120000, -120000, -40000}, {"target", "300,-300,-100"});  // the edges
+  check_travel(m(), {0, 0, 0}, {0, 0, 8000}, {"target", "0,0,20"});
   EXPECT_HAS(
       refusal([] {
-        check_travel(m(), {0, 0, 0}, {60001, 0, 0}, {"--distance", "150.0025"});
+        check_travel(m(), {0, 0, 0}, {120001, 0, 0}, {"--distance", "300.0025"});
       }),
-      "--distance = \"150.0025\": axis x would end at 150.0025 mm, from 0 mm; expected a move that ends "
-      "within axis x's travel -150 mm..150 mm");
+      "--distance = \"300.0025\": axis x would end at 300.0025 mm, from 0 mm; expected a move that ends "
+      "within axis x's travel -300 mm..300 mm");
+  EXPECT_HAS(
+      refusal([] {
+        check_travel(m(), {0, 0, 4000}, {0, 0, 8001}, {"--size", "10.0025"});
+      }),
+      "axis z would end at 20.0025 mm, from 10 mm; expected a move that ends within axis z's travel -100 "
+      "mm..20 mm");
   EXPECT_HAS(refusal([] {
                check_travel(m(), {4000, 0, 0}, {4000, -400000000000, 0}, {"target", "10,-1e6"});
              }),
              "axis y would end at -1000000000 mm, from 0 mm");
-  // z is not an axis of this machine: its counts are not looked at.
-  check_travel(m(), {0, 0, 0}, {0, 0, int64_t(1) << 40}, {"target", ""});
 }
 
 TEST(MachineLimits, FeedKeepsEveryAxisWithinItsSpeed) {
@@ -188,6 +194,8 @@ TEST(MachineLimits, FeedKeepsEveryAxisWithinItsSpeed) {
   // 45 degrees: each axis at 0.5 m/s is sqrt(2) * 0.5 m/s along the path.
   EXPECT_NEAR(max_feed_mm_min(m(), {0, 0, 0}, {4000, -4000, 0}), 30000 * std::sqrt(2.0), 1e-6);
   EXPECT_EQ(max_feed_mm_min(m(), {7, 7, 0}, {7, 7, 0}), 0);
+  // x with z: z's 0.25 m/s binds; along (3, 0, 4) z moves 4/5 of the path.
+  EXPECT_NEAR(max_feed_mm_min(m(), {0, 0, 0}, {1200, 0, 1600}), 15000 * 5 / 4.0, 1e-6);
   check_feed(m(), {0, 0, 0}, {4000, 0, 0}, 30000, {"--feed", "30000"});
   EXPECT_HAS(
       refusal([] {
@@ -201,7 +209,7 @@ TEST(MachineLimits, FollowingErrorLimitsInCounts) {
   const auto c = ferr_counts(m());
   EXPECT_EQ(c[0], 400u);  // 1 mm at 400 counts/mm
   EXPECT_EQ(c[1], 400u);
-  EXPECT_EQ(c[2], 0u);  // no z axis
+  EXPECT_EQ(c[2], 400u);
   // A step needs its own size on top: 1 mm -> 800 counts.
   EXPECT_EQ(step_ferr_counts(m(), 0, 400, {"--size", "1"}), 800u);
   EXPECT_EQ(step_ferr_counts(m(), 0, -400, {"--size", "-1"}), 800u);

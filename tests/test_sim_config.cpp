@@ -87,9 +87,10 @@ TEST(SimConfig, DefaultParsesToTheDatasheetValues) {
   EXPECT_EQ(m.host_io_latency_s, 0.001);
   EXPECT_EQ(m.host_dac_bits, 12);
   EXPECT_EQ(m.host_dac_range_v, 10);
-  ASSERT_EQ(m.axes.size(), 2u);
+  ASSERT_EQ(m.axes.size(), 3u);
   EXPECT_EQ(m.axes[0].name, "x");
   EXPECT_EQ(m.axes[1].name, "y");
+  EXPECT_EQ(m.axes[2].name, "z");
   for (const AxisConfig& a : m.axes) {
     // maxon RE 40 148867 (configs/default.toml cites the datasheet lines).
     EXPECT_EQ(a.motor.r_ohm, 1.13);
@@ -108,7 +109,8 @@ TEST(SimConfig, DefaultParsesToTheDatasheetValues) {
     EXPECT_EQ(a.lead_m_per_rev, 0.005);
     EXPECT_EQ(a.pid.ts_s, 1e-4);
   }
-  // The two axes are identical.
+  // X and Y are identical; Z carries the spindle's weight.
+  EXPECT_NEAR(m.axes[2].load_force_n, m.axes[2].load_kg * 9.81, 1e-9);
   EXPECT_EQ(m.axes[0].pid.kp, m.axes[1].pid.kp);
   EXPECT_EQ(m.axes[0].load_kg, m.axes[1].load_kg);
 }
@@ -139,7 +141,10 @@ TEST(SimConfig, DefaultUnitsAreSane) {
     EXPECT_DOUBLE_EQ(a.drive.dac_range_v * a.drive.amp_gain, a.drive.supply_v);
     EXPECT_DOUBLE_EQ(counts_per_m(a), 400000);
     EXPECT_NEAR(reflected_inertia_kg_m2(a), a.load_kg * std::pow(0.005 / (2 * kPi), 2), 1e-15);
-    EXPECT_EQ(reflected_torque_nm(a), 0);
+    if (a.name == "z")
+      EXPECT_NEAR(reflected_torque_nm(a), a.load_force_n * 0.005 / (2 * kPi), 1e-12);
+    else
+      EXPECT_EQ(reflected_torque_nm(a), 0);
   }
 }
 
@@ -157,18 +162,39 @@ TEST(SimConfig, AxisLookupIsCaseInsensitive) {
 }
 
 TEST(SimConfig, OptionalZAxis) {
+  // The built-in router without its Z tables: an XY table.
   std::string text(default_machine_toml());
   for (const std::string t : {"", ".motor", ".drive", ".pid"}) {
-    const auto from = text.find("[axis.y" + t + "]");
+    const auto from = text.find("[axis.z" + t + "]");
+    ASSERT_NE(from, std::string::npos);
     const auto to = text.find("\n[", from + 1);
-    std::string block = text.substr(from, to - from);
-    block.replace(0, 7, "[axis.z");
-    text += "\n" + block + "\n";
+    text.erase(from, to == std::string::npos ? std::string::npos : to - from + 1);
   }
-  const MachineConfig m = parse_machine(text, "xyz.toml");
-  ASSERT_EQ(m.axes.size(), 3u);
-  EXPECT_EQ(m.axes[2].name, "z");
-  EXPECT_EQ(axis(m, "Z").motor.r_ohm, 1.13);
+  const MachineConfig m = parse_machine(text, "xy.toml");
+  ASSERT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(m.axes[1].name, "y");
+  // The planner's keys are optional: an older file without them loads with
+  // the documented defaults.
+  for (const std::string key : {"max_accel_m_s2", "travel_min_m", "travel_max_m"}) {
+    for (size_t at = text.find("\n" + key); at != std::string::npos; at = text.find("\n" + key))
+      text.erase(at + 1, text.find('\n', at + 1) - at);
+  }
+  const auto planner = text.find("\n[planner]");
+  ASSERT_NE(planner, std::string::npos);
+  text.erase(planner + 1);
+  const MachineConfig old = parse_machine(text, "old.toml");
+  EXPECT_EQ(old.axes[0].max_accel_m_s2, 1.0);
+  EXPECT_EQ(old.axes[0].travel_min_m, -1.0);
+  EXPECT_EQ(old.planner.junction_deviation_m, 1e-5);
+  std::string inverted(default_machine_toml());
+  inverted.replace(inverted.find("travel_max_m = 0.3"), 18, "travel_max_m = -0.5");
+  try {
+    parse_machine(inverted, "inv.toml");
+    ADD_FAILURE() << "an inverted travel was accepted";
+  } catch (const mc::host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("travel_max_m > travel_min_m"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("inv.toml:"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SimConfig, UnknownKeyIsAnError) {
@@ -234,8 +260,8 @@ TEST(SimConfig, PhysicallyAbsurdValuesAreErrors) {
                "axis.x.max_following_error_m", "at least one encoder count");
   // 750 000 iterations/s at 12 MHz over 400 000 counts/m: 1.875 m/s.
   expect_error(edit("axis.x", "max_speed_m_s", "max_speed_m_s = 5"), "axis.x.max_speed_m_s", "up to 1.875");
-  expect_error(edit("axis.x", "travel_max_m", "travel_max_m = -0.2"), "axis.x.travel_max_m",
-               "travel_max_m > travel_min_m = -0.15");
+  expect_error(edit("axis.x", "travel_max_m", "travel_max_m = -0.4"), "axis.x.travel_max_m",
+               "travel_max_m > travel_min_m = -0.3");
   expect_error(edit("axis.y", "travel_min_m", "travel_min_m = -1e4"), "axis.y.travel_min_m",
                "within the board's 32-bit positions");
   // The PID: Ts the core runs (its 70-cycle sweep .. 10 ms), Kp it realizes as a controller.
@@ -244,14 +270,27 @@ TEST(SimConfig, PhysicallyAbsurdValuesAreErrors) {
   expect_error(edit("axis.x.pid", "kp", "kp = 8000000"), "axis.x.pid.kp", "0..32767");
 }
 
-TEST(SimConfig, TravelIsOptional) {
-  const MachineConfig m = default_machine();
-  EXPECT_EQ(m.axes[0].travel_min_m, -0.15);
-  EXPECT_EQ(m.axes[0].travel_max_m, 0.15);
-  // Without the keys: every position the board's 32-bit counters hold.
-  const MachineConfig open = parse_machine(edit("axis.y", "travel_max_m", "").text, "t.toml");
-  EXPECT_DOUBLE_EQ(open.axes[1].travel_max_m, 2147483647.0 / 400000);
-  EXPECT_EQ(open.axes[1].travel_min_m, -0.15);
+// Where the board's 32-bit counters reach less than the +-1 m default (a
+// 2^24-count encoder on a 1 mm lead: 16.8e9 counts/m), the default is what
+// they reach.
+TEST(SimConfig, DefaultTravelStaysWithinTheCounters) {
+  std::string text(default_machine_toml());
+  const auto y = text.find("[axis.y]");
+  const auto set = [&](const std::string& key, const std::string& value) {
+    const auto at = text.find("\n" + key + " ", y) + 1;
+    text.replace(at, text.find('\n', at) - at, value.empty() ? "" : key + " = " + value);
+  };
+  set("lead_m_per_rev", "0.001");
+  set("encoder_counts_per_rev", "16777216");
+  set("max_following_error_m", "1e-6");  // 16777 counts: within FERR
+  set("max_speed_m_s", "1e-5");          // within the interpolator's rate at this scale
+  set("travel_min_m", "");
+  set("travel_max_m", "");
+  const MachineConfig m = parse_machine(text, "fine.toml");
+  const double reach = 2147483647.0 / (16777216 / 0.001);
+  EXPECT_DOUBLE_EQ(m.axes[1].travel_max_m, reach);
+  EXPECT_DOUBLE_EQ(m.axes[1].travel_min_m, -reach);
+  EXPECT_EQ(m.axes[0].travel_max_m, 0.3);
 }
 
 TEST(SimConfig, StructureErrors) {
@@ -281,7 +320,7 @@ TEST(SimConfig, LoadFromFile) {
   }
   const MachineConfig m = load_machine(path);
   EXPECT_EQ(m.source, path);
-  EXPECT_EQ(m.axes.size(), 2u);
+  EXPECT_EQ(m.axes.size(), 3u);
   EXPECT_EQ(machine_or_default("").source, "built-in default");
   std::remove(path.c_str());
   try {

@@ -56,6 +56,7 @@ void enable(const std::string& axis, bool json) {
   const int naxes = read_naxes(l);
   const std::vector<int> axes = axes_of(axis, naxes);
   enable_axes(l, axes, note);
+  mc::machine::arm_following_limits(l, machine());
   const BoardState s = read_state(l);
   if (json) {
     nlohmann::ordered_json j;
@@ -109,12 +110,6 @@ void clear_fault(bool json) {
 }
 
 // ---- jog / move -------------------------------------------------------------------
-// mm to counts, saturated far beyond any travel (2^53 counts) so that the
-// travel check, not an overflow, answers "--distance 1e300".
-int64_t counts_of(double mm, double counts_per_m) {
-  constexpr double kFar = 9007199254740992.0;
-  return std::llround(std::clamp(mm * 1e-3 * counts_per_m, -kFar, kFar));
-}
 
 struct MotionOptions {
   std::string axis, distance, feed, target;
@@ -166,7 +161,7 @@ void jog(const MotionOptions& o) {
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {
         Vec3 to = from;
-        to[size_t(a)] += counts_of(mm, s[size_t(a)]);
+        to[size_t(a)] += mc::machine::counts_of(mm, s[size_t(a)]);
         return to;
       },
       {"--distance", o.distance}, o.feed, o.json);
@@ -189,7 +184,7 @@ void move(const MotionOptions& o) {
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {
         Vec3 to = from;
-        for (size_t a = 0; a < mm.size(); ++a) to[a] = counts_of(mm[a], s[a]);
+        for (size_t a = 0; a < mm.size(); ++a) to[a] = mc::machine::counts_of(mm[a], s[a]);
         return to;
       },
       {"target", o.target}, o.feed, o.json);

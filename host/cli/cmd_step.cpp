@@ -74,9 +74,7 @@ void step(const StepOptions& o) {
   const double duration = parse_duration(o.duration, "--duration");
   if (duration > 10) throw InputError("--duration", quote(o.duration), "at most 10 s");
   const double cpm = machine_scale(a0, o.axis);
-  if (!(std::fabs(mm * 1e-3 * cpm) < 2147483647.0))
-    throw InputError("--size", quote(o.size), "a step within the board's 32-bit positions");
-  const int32_t counts = int32_t(std::llround(mm * 1e-3 * cpm));
+  const int64_t counts = mc::machine::counts_of(mm, cpm);
   if (counts == 0) throw InputError("--size", quote(o.size), "a step of at least one encoder count");
   // The outputs and the machine's limits, before the board is touched.
   if (!o.csv.empty()) require_writable_file(o.csv, "--csv");
@@ -92,14 +90,15 @@ void step(const StepOptions& o) {
   to[size_t(a)] += counts;
   mc::machine::check_travel(m, from, to, asked);
   catch_interrupts();
-  const StepCapture c = capture_step(l, a, counts, duration, note, ferr);
+  // Within FERR's 16 bits (step_ferr_counts), so within 32.
+  const StepCapture c = capture_step(l, a, int32_t(counts), duration, note, ferr);
   if (!o.csv.empty()) write_step_csv(o.csv, c);
   if (!o.plot.empty()) write_step_plot(o.plot, c, cpm);
   if (o.json) {
     nlohmann::ordered_json j;
     j["axis"] = axis_name(a);
     j["step_counts"] = counts;
-    j["step_mm"] = counts / cpm * 1e3;
+    j["step_mm"] = double(counts) / cpm * 1e3;
     j["ts_s"] = c.ts;
     j["decimation"] = c.decim;
     j["decimation_frames_alone"] = c.decim_needed;
@@ -110,9 +109,9 @@ void step(const StepOptions& o) {
     j["metrics"] = metrics_json(c.m);
     std::cout << j.dump(2) << '\n';
   } else {
-    std::cout << "step of " << counts << " counts (" << counts / cpm * 1e3 << " mm) on axis " << axis_name(a)
-              << " at Ts " << format_duration(c.ts) << ", captured " << format_duration(duration)
-              << " of board time\n";
+    std::cout << "step of " << counts << " counts (" << double(counts) / cpm * 1e3 << " mm) on axis "
+              << axis_name(a) << " at Ts " << format_duration(c.ts) << ", captured "
+              << format_duration(duration) << " of board time\n";
     std::cout << "telemetry every " << c.decim << (c.decim == 1 ? " sample" : " samples") << " ("
               << format_duration(c.decim * c.ts) << "): a frame takes "
               << format_duration(10.0 * telemetry_frame_bytes(1) / double(l.read(br::BAUD)))

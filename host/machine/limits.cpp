@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "hls/board_regs.hpp"
+#include "hls/pid_regs.hpp"
 #include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/link/board_state.hpp"
@@ -82,15 +83,21 @@ std::array<uint32_t, 3> ferr_counts(const MachineConfig& m) {
   return c;
 }
 
-std::array<uint32_t, 3> arm_following_limits(mc::host::BoardLink& l, const MachineConfig& m) {
+void arm_following_limits(mc::host::BoardLink& l, const MachineConfig& m) {
   namespace br = mc::board::reg;
   const std::array<uint32_t, 3> c = ferr_counts(m);
   const int naxes = mc::host::read_naxes(l);
   for (int a = 0; a < naxes && a < int(axes_of(m)); ++a) {
+    const bool enabled = l.read(mc::pid_reg::addr(uint8_t(a), mc::pid_reg::CTRL)) & 1;
+    const uint32_t want = enabled ? c[size_t(a)] : 0;
     const uint16_t addr = br::axis(a, br::AX_FERR);
-    if ((l.read(addr) & kFerrMax) != c[size_t(a)]) l.write_verify(addr, c[size_t(a)], kFerrMax);
+    if ((l.read(addr) & kFerrMax) != want) l.write_verify(addr, want, kFerrMax);
   }
-  return c;
+}
+
+int64_t counts_of(double mm, double counts_per_m) {
+  constexpr double kFar = 9007199254740992.0;  // 2^53
+  return std::llround(std::clamp(mm * 1e-3 * counts_per_m, -kFar, kFar));
 }
 
 uint32_t step_ferr_counts(const MachineConfig& m, int axis, int64_t step_counts, const Asked& asked) {

@@ -33,12 +33,19 @@ double max_feed_mm_min(const MachineConfig& m, const mc::host::Vec3& from, const
 void check_feed(const MachineConfig& m, const mc::host::Vec3& from, const mc::host::Vec3& to,
                 double feed_mm_min, const Asked& asked);
 
+// mm as board counts at counts_per_m, saturated at +-2^53 (far beyond any
+// travel), so that the travel check, not an overflow, answers "--distance 1e300".
+int64_t counts_of(double mm, double counts_per_m);
+
 // The board's following-error limit of each axis, counts (0 for an axis the
 // machine lacks): max_following_error_m at the axis' scale, at least 1.
 std::array<uint32_t, 3> ferr_counts(const MachineConfig& m);
-// Writes and verifies FERR on each axis the machine has (and the board), so
-// the limit holds whenever the drives are armed. Returns what it wrote.
-std::array<uint32_t, 3> arm_following_limits(mc::host::BoardLink& l, const MachineConfig& m);
+// Writes and verifies FERR on each axis the machine has (and the board):
+// ferr_counts() on the axes whose PID is enabled, 0 (off) on the others,
+// whose position nothing holds (a Z carriage sinks under its weight while
+// its PID is off). Commands call it when they connect and after they enable
+// axes, so the limit holds whenever their drives are armed.
+void arm_following_limits(mc::host::BoardLink& l, const MachineConfig& m);
 // The FERR a step experiment needs on an axis: the step itself is a
 // following error the moment it is commanded, so the limit is |step| plus
 // the machine's margin; InputError naming `asked` when that exceeds the

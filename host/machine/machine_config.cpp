@@ -92,9 +92,15 @@ class Reader {
     return v;
   }
 
-  // The value when the key is there, else `fallback`.
-  double optional_number(std::string_view key, double fallback, Range r, std::string_view unit) {
-    return has(key) ? number(key, r, unit) : fallback;
+  // A key added after the first release: files written before it keep
+  // loading, with the documented default (configs/default.toml names it).
+  double number_or(std::string_view key, double fallback, Range r, std::string_view unit) {
+    if (!has(key)) {
+      used_.insert(std::string(key));
+      order_.emplace_back(key);
+      return fallback;
+    }
+    return number(key, r, unit);
   }
 
   int integer(std::string_view key, int lo, int hi, std::string_view unit) {
@@ -279,12 +285,13 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
       r.number("max_speed_m_s", Range::positive, "m/s", top,
                "the interpolator's top rate " + format_number(mc::host::max_iteration_rate(clock_hz)) +
                    " counts/s at clock_hz");
+  a.max_accel_m_s2 = r.number_or("max_accel_m_s2", 1.0, Range::positive, "m/s^2");
   // Travel: machine coordinates from where the axes were when the board
-  // started (there is no homing yet); default, every position the board's
-  // 32-bit counters hold.
+  // started (there is no homing yet), within what the board's 32-bit
+  // counters hold; default +-1 m (less where the counters reach less).
   const double reach = kMaxPosCounts / cpm;
-  a.travel_min_m = r.optional_number("travel_min_m", -reach, Range::any, "m");
-  a.travel_max_m = r.optional_number("travel_max_m", reach, Range::any, "m");
+  a.travel_min_m = r.number_or("travel_min_m", -std::min(1.0, reach), Range::any, "m");
+  a.travel_max_m = r.number_or("travel_max_m", std::min(1.0, reach), Range::any, "m");
   if (a.travel_min_m < -reach || a.travel_max_m > reach)
     throw r.error(a.travel_min_m < -reach ? "travel_min_m" : "travel_max_m",
                   format_number(a.travel_min_m < -reach ? a.travel_min_m : a.travel_max_m),
@@ -297,6 +304,20 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   a.pid = read_pid(r.table("pid"), clock_hz);
   r.finish();
   return a;
+}
+
+PlannerSettings read_planner(Reader r) {
+  PlannerSettings p;
+  p.junction_deviation_m = r.number_or("junction_deviation_m", p.junction_deviation_m, Range::positive, "m");
+  p.arc_tolerance_m = r.number_or("arc_tolerance_m", p.arc_tolerance_m, Range::positive, "m");
+  p.ramp_piece_s = r.number_or("ramp_piece_s", p.ramp_piece_s, Range::positive, "s");
+  p.accel_window_s = r.number_or("accel_window_s", p.accel_window_s, Range::positive, "s");
+  p.queue_ahead_s = r.number_or("queue_ahead_s", p.queue_ahead_s, Range::positive, "s");
+  if (p.ramp_piece_s > p.accel_window_s)
+    throw r.error("ramp_piece_s", format_number(p.ramp_piece_s),
+                  "ramp_piece_s <= accel_window_s = " + format_number(p.accel_window_s));
+  r.finish();
+  return p;
 }
 
 std::string lower(std::string_view s) {
@@ -345,6 +366,7 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
     m.host_dac_range_v = r.number("dac_range_v", Range::positive, "V", 100, "a DAC's output");
     r.finish();
   }
+  if (top.has("planner")) m.planner = read_planner(top.table("planner"));
   Reader axes = top.table("axis");
   const std::vector<std::string> names = {"x", "y", "z"};
   for (const std::string& k : axes.keys()) {

@@ -59,9 +59,22 @@ struct AxisConfig {
   PidConfig pid;
   double max_following_error_m;  // armed on the board's FERR whenever motionctl arms the drives
   double max_speed_m_s;          // jog, move and the planner refuse feeds above it
-  // Soft travel limits, machine coordinates (m from where the axis was when
-  // the board started); optional keys, default the board's 32-bit range.
-  double travel_min_m = 0, travel_max_m = 0;
+  // Optional keys (older files load with these defaults).
+  double max_accel_m_s2 = 1.0;  // path planner: the axis's acceleration limit
+  // Soft travel limits: machine coordinates the axis may reach (m from where
+  // it was when the board started; no homing yet). jog, move and step refuse
+  // targets beyond them before anything moves.
+  double travel_min_m = -1.0;
+  double travel_max_m = 1.0;
+};
+
+// [planner], optional (docs/gcode.md, "Planner"). Defaults as Grbl's.
+struct PlannerSettings {
+  double junction_deviation_m = 1e-5;  // Grbl $11: 0.010 mm
+  double arc_tolerance_m = 2e-6;       // Grbl $12: 0.002 mm, for arcs the core cannot run whole
+  double ramp_piece_s = 0.004;         // a feed ramp is chopped into constant-feed pieces this long
+  double accel_window_s = 0.02;        // acceleration is limited as an average over this window
+  double queue_ahead_s = 0.25;         // motion kept queued on the board while streaming
 };
 
 struct MachineConfig {
@@ -69,6 +82,7 @@ struct MachineConfig {
   double clock_hz = 12e6;
   double plant_dt_s = 1e-6;
   std::vector<AxisConfig> axes;  // x, y, optional z, in that order
+  PlannerSettings planner;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;

@@ -1,0 +1,145 @@
+#include "host/machine/job.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "host/base/errors.hpp"
+
+namespace mc::machine {
+
+using mc::host::InputError;
+using mc::host::Move;
+using mc::host::Vec3d;
+
+mc::host::PlannerConfig planner_config(const MachineConfig& m) {
+  mc::host::PlannerConfig c;
+  for (size_t k = 0; k < m.axes.size() && k < 3; ++k) {
+    const AxisConfig& a = m.axes[k];
+    mc::host::AxisLimits& l = c.axes[k];
+    l.present = true;
+    l.counts_per_mm = counts_per_m(a) * 1e-3;
+    l.max_rate_mm_s = a.max_speed_m_s * 1e3;
+    l.max_accel_mm_s2 = a.max_accel_m_s2 * 1e3;
+    l.min_mm = a.travel_min_m * 1e3;
+    l.max_mm = a.travel_max_m * 1e3;
+  }
+  c.junction_deviation_mm = m.planner.junction_deviation_m * 1e3;
+  c.arc_tolerance_mm = m.planner.arc_tolerance_m * 1e3;
+  c.ramp_piece_s = m.planner.ramp_piece_s;
+  c.accel_window_s = m.planner.accel_window_s;
+  c.clock_hz = m.clock_hz;
+  return c;
+}
+
+namespace {
+std::string list(const std::vector<mc::gcode::Error>& errors) {
+  std::string s;
+  for (const auto& e : errors) s += (s.empty() ? "" : "\n") + e.format();
+  return s;
+}
+}  // namespace
+
+ProgramErrors::ProgramErrors(std::vector<mc::gcode::Error> errors)
+    : std::runtime_error(list(errors)), errors_(std::move(errors)) {}
+
+Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m, const Vec3d& start) {
+  mc::gcode::Options o;
+  o.start = start;
+  const mc::gcode::ProgramResult prog = mc::gcode::interpret_program(text, name, o);
+  if (!prog.ok()) throw ProgramErrors(prog.errors);
+  Job j;
+  j.file = name;
+  j.cfg = planner_config(m);
+  j.lines = prog.lines;
+  j.moves = mc::host::to_moves(prog.calls, start, j.cfg, name);
+  mc::host::plan_speeds(j.moves, j.cfg);
+  j.pieces = mc::host::chop(j.moves, j.cfg);
+  j.summary = mc::host::summarize(j.moves, j.pieces, j.cfg);
+  return j;
+}
+
+Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("G-code file", mc::host::quote(path), "a readable file", "cannot open");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return plan_program(text.str(), path, m, start);
+}
+
+mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
+                                   const std::vector<Move>& moves, const mc::host::PlannerConfig& cfg) {
+  std::vector<size_t> path;  // indices of the motion moves
+  for (size_t i = 0; i < moves.size(); ++i)
+    if (moves[i].is_motion()) path.push_back(i);
+  mc::host::ErrorStats st;
+  if (path.empty()) return st;
+  double sum2 = 0;
+  size_t at = 0;  // the move the command is on; only ever moves forward
+  double cell = 0;
+  for (const mc::host::AxisLimits& a : cfg.axes)
+    if (a.present) cell = std::max(cell, 1.0 / a.counts_per_mm);
+  for (const mc::host::JobSample& s : samples) {
+    mc::host::Vec3 c{s.cmd[0], s.cmd[1], s.cmd[2]}, p{s.pos[0], s.pos[1], s.pos[2]};
+    const Vec3d cmd = mc::host::to_mm(c, cfg), pos = mc::host::to_mm(p, cfg);
+    // Advance while a later move holds the command (within a count's reach).
+    for (size_t k = at; k < path.size() && k < at + 64; ++k) {
+      if (mc::host::distance_to(moves[path[k]], cmd) <= cell) {
+        at = k;
+        // Prefer the latest move that holds it: at a junction both do.
+        while (at + 1 < path.size() && mc::host::distance_to(moves[path[at + 1]], cmd) <= cell &&
+               mc::host::distance_to(moves[path[at]], moves[path[at + 1]].start) <= cell)
+          ++at;
+        break;
+      }
+    }
+    // The measured point lags the command: look around the command's move.
+    double d = std::numeric_limits<double>::infinity();
+    const size_t lo = at >= 8 ? at - 8 : 0, hi = std::min(path.size(), at + 9);
+    for (size_t k = lo; k < hi; ++k) d = std::min(d, mc::host::distance_to(moves[path[k]], pos));
+    sum2 += d * d;
+    st.max = std::max(st.max, d);
+    ++st.n;
+  }
+  st.rms = st.n ? std::sqrt(sum2 / double(st.n)) : 0;
+  return st;
+}
+
+JobReport report(const Job& job, const mc::host::StreamResult& r, double ts_s) {
+  JobReport rep;
+  rep.planned_s = r.planned_s;
+  rep.underruns = r.underruns;
+  rep.segments = r.segments;
+  rep.telemetry_gaps = r.gaps;
+  rep.stopped = r.stopped;
+  rep.stopped_at_line = r.stopped_at_line;
+  rep.peak_accel = job.summary.peak_accel;
+  for (size_t k = 0; k < 3; ++k) rep.accel_limit[k] = job.cfg.axes[k].max_accel_mm_s2;
+  // Board time: from the last sample before the motion began to the first
+  // after it ended (the command stands still at both).
+  const auto& s = r.samples;
+  if (s.size() >= 2) {
+    size_t first = 0, last = s.size() - 1;
+    while (first + 1 < s.size() && s[first + 1].cmd == s[0].cmd) ++first;
+    while (last > first && s[last - 1].cmd == s.back().cmd) --last;
+    rep.board_s = double(s[last].n - s[first].n) * ts_s;
+    if (rep.board_s > 0) rep.segments_per_s = double(r.segments) / rep.board_s;
+  }
+  rep.contour = contour_error(s, job.moves, job.cfg);
+  double sum2 = 0;
+  for (const mc::host::JobSample& x : s) {
+    double worst = 0;
+    for (size_t k = 0; k < 3; ++k)
+      if (job.cfg.axes[k].present)
+        worst = std::max(worst, std::fabs(double(x.cmd[k] - x.pos[k])) / job.cfg.axes[k].counts_per_mm);
+    sum2 += worst * worst;
+    rep.following.max = std::max(rep.following.max, worst);
+    ++rep.following.n;
+  }
+  rep.following.rms = rep.following.n ? std::sqrt(sum2 / double(rep.following.n)) : 0;
+  return rep;
+}
+
+}  // namespace mc::machine

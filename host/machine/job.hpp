@@ -1,0 +1,74 @@
+// A G-code job on this machine: the program checked and planned with the
+// machine's limits (configs/default.toml: max_speed_m_s, max_accel_m_s2,
+// travel_*_m, [planner]), and the report of a run: time against plan, the
+// command's acceleration, underruns and the contour error of the measured
+// path against the programmed one.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "host/control/metrics.hpp"
+#include "host/gcode/interpreter.hpp"
+#include "host/machine/machine_config.hpp"
+#include "host/motion/job_stream.hpp"
+#include "host/motion/planner.hpp"
+
+namespace mc::machine {
+
+// The planner's limits from the machine (mm, mm/s, mm/s^2).
+mc::host::PlannerConfig planner_config(const MachineConfig& m);
+
+// Every error of a program, FILE:LINE:COLUMN each (what() lists them all).
+class ProgramErrors : public std::runtime_error {
+ public:
+  explicit ProgramErrors(std::vector<mc::gcode::Error> errors);
+  const std::vector<mc::gcode::Error>& errors() const { return errors_; }
+
+ private:
+  std::vector<mc::gcode::Error> errors_;
+};
+
+struct Job {
+  std::string file;
+  mc::host::PlannerConfig cfg;
+  int lines = 0;  // lines read
+  std::vector<mc::host::Move> moves;
+  std::vector<mc::host::Piece> pieces;
+  mc::host::PlanSummary summary;
+};
+
+// Interprets the whole file from `start` (machine mm) and plans it. Throws
+// ProgramErrors for G-code errors and InputError ("FILE:line N: ...") for
+// what the machine cannot do (travel, an absent axis, a probe); in both
+// cases before anything moves.
+Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Vec3d& start);
+Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m,
+                 const mc::host::Vec3d& start);
+
+struct JobReport {
+  double planned_s = 0;  // of what ran
+  double board_s = 0;    // the board's time from the first to the last sample (telemetry), 0 without
+  int underruns = 0;
+  size_t segments = 0;
+  double segments_per_s = 0;            // segments / board time
+  std::array<double, 3> peak_accel{};   // mm/s^2, the command (planner.hpp peak_accel)
+  std::array<double, 3> accel_limit{};  // mm/s^2
+  mc::host::ErrorStats contour;         // mm: measured position against the programmed path
+  mc::host::ErrorStats following;       // mm: |command - position|, the worst axis per sample
+  int64_t telemetry_gaps = 0;
+  bool stopped = false;
+  int stopped_at_line = 0;
+};
+
+// Contour error of the samples (counts) against the path of the moves:
+// each sample's distance from the nearest move around the one its command
+// lies on.
+mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
+                                   const std::vector<mc::host::Move>& moves,
+                                   const mc::host::PlannerConfig& cfg);
+
+JobReport report(const Job& job, const mc::host::StreamResult& r, double ts_s);
+
+}  // namespace mc::machine
