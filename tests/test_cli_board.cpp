@@ -58,11 +58,11 @@ TEST(CliBoard, GainsRoundTripThroughTheVirtualBoard) {
   EXPECT_EQ(run_json({"--sim", "enable", "--axis", "x", "--json"})["enabled"], json::array({"x"}));
   const json m = run_json({"--sim", "jog", "--axis", "x", "--distance", "0.1", "--feed", "600", "--json"});
   EXPECT_TRUE(m["moved"]);
-  ASSERT_EQ(m["axes"].size(), 2u);  // the default machine: x and y
+  ASSERT_EQ(m["axes"].size(), 3u);  // the default machine: x, y and z
   EXPECT_EQ(m["axes"][0]["axis"], "x");
   EXPECT_NEAR(double(m["axes"][0]["position_mm"]), double(m["axes"][0]["command_mm"]), 0.05);
   const json d = run_json({"--sim", "disable", "--json"});
-  EXPECT_EQ(d["disabled"], json::array({"x", "y"}));
+  EXPECT_EQ(d["disabled"], json::array({"x", "y", "z"}));
   EXPECT_TRUE(d["drives_off"]);
   EXPECT_TRUE(run_json({"--sim", "clear-fault", "--json"})["fault_word"].is_number());
 }

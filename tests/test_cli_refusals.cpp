@@ -122,6 +122,7 @@ TEST(CliRefusals, EachBadInputIsRefusedAndTheBoardIsUnchanged) {
       // Outputs checked before the capture.
       {{"step", "--axis", "x", "--csv", dir + "/no/such/dir/s.csv"}, "--csv"},
       {{"step", "--axis", "x", "--plot", dir}, "--plot"},
+      {{"config", "save", dir + "/no/such/dir/gains.toml"}, "FILE"},
       // A bandwidth no PID sampled at 100 us reaches, before the experiment.
       {{"tune", "--axis", "x", "--bandwidth", "1e12"}, "Nyquist"},
       // An empty axis name is not "every axis".

@@ -232,7 +232,9 @@ void add_board_commands(CLI::App& app) {
   CLI::App* jg = app.add_subcommand("jog", "Move one axis by a distance at a feed, and wait until done");
   jg->footer(std::string(kBoardFooter) +
              "\nArms the drives (clearing a watchdog fault left by the previous command), starts from where\n"
-             "the axes are, and keeps the link alive until the move is done.");
+             "the axes are, and keeps the link alive until the move is done. Refused before anything moves:\n"
+             "a target beyond an axis' travel_min_m..travel_max_m, a feed that drives an axis above its\n"
+             "max_speed_m_s (the machine TOML).");
   jg->add_option("--axis", jo->axis, "x, y or z")->required()->type_name("AXIS");
   jg->add_option("--distance", jo->distance, "mm, signed")->required()->type_name("MM");
   jg->add_option("--feed", jo->feed, "mm/min along the path")->required()->type_name("MM/MIN");

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -115,6 +116,7 @@ void set(const GainsOptions& o) {
 
 // ---- config save / load ---------------------------------------------------------------
 void save(const std::string& file) {
+  require_writable_file(file, "FILE");
   Board b = open_board();
   const int n = mc::machine::save_gains(*b.link, file);
   std::cout << "saved " << n << " axes to " << file << '\n';
@@ -148,7 +150,9 @@ void add_gains_commands(CLI::App& app) {
       std::string(kFooter) +
       "\nOptions not given keep the board's current values (or, with --defaults, the machine config's).\n"
       "Gains in drive units (+-32767) per count: Kp per count, Ki per count*s, Kd per count/s.\n"
-      "Ts is one register for every axis.");
+      "Ts is one register for every axis: whole clock cycles from the core's sweep (70 cycles) to 10 ms.\n"
+      "Kp at most 32767. Everything is checked before the first write; a write the board refuses\n"
+      "half-way puts the previous Ts and words back.");
   st->add_option("--axis", o->axis, "x, y or z")->required()->type_name("AXIS");
   st->add_option("--kp", o->kp, "Proportional gain")->type_name("GAIN");
   st->add_option("--ki", o->ki, "Integral gain")->type_name("GAIN");

@@ -138,7 +138,9 @@ void add_step_commands(CLI::App& app) {
       std::string(kBoardFooter) +
       "\nArms the drives, enables the axis' PID, streams telemetry (POS, CMD, ERR, OUT) at the finest\n"
       "decimation the link carries at the board's Ts, steps the command by --size from where it is,\n"
-      "and captures --duration of board time. Gaps in the telemetry are reported, never filled in.");
+      "and captures --duration of board time. Gaps in the telemetry are reported, never filled in.\n"
+      "The step must end within the axis' travel; during it the following-error limit (FERR) is the\n"
+      "step plus max_following_error_m, which must fit FERR's 16 bits, and is put back afterwards.");
   st->add_option("--axis", o->axis, "x, y or z")->required()->type_name("AXIS");
   st->add_option("--size", o->size, "Step size, mm, signed (default 1)")->type_name("MM");
   st->add_option("--duration", o->duration, "Capture after the step, board time (default 0.2s)")
