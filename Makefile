@@ -5,7 +5,7 @@ BUILD_SAN  ?= build-san
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog
+.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog formal
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -26,14 +26,20 @@ bench: all
 	$(BUILD)/motionctl bench --out $(BUILD)/bench
 
 # The same C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer.
-# Synthesis tests are skipped: they test the tools' view of the RTL, not our C++.
+# Synthesis and formal tests are skipped: they test the tools' view of the RTL,
+# not our C++.
 test-sanitize: deps
 	@test -f $(BUILD_SAN)/CMakeCache.txt || cmake -S . -B $(BUILD_SAN) $(CMAKE_GEN) -DMC_SANITIZE=ON
 	cmake --build $(BUILD_SAN) -j $(JOBS)
-	ctest --test-dir $(BUILD_SAN) --output-on-failure -j $(JOBS) -LE synth
+	ctest --test-dir $(BUILD_SAN) --output-on-failure -j $(JOBS) -LE 'synth|formal'
 
 lint: deps
 	scripts/lint.sh $(BUILD)
+
+# Every formal proof of the RTL, by induction (docs/formal.md); `make test`
+# runs only the quick ones. Logs and traces: $(BUILD)/formal/<block>/.
+formal: deps
+	FORMAL_DIR=$(BUILD)/formal scripts/formal.sh -j $(JOBS)
 
 format:
 	clang-format -i $$(git ls-files '*.cpp' '*.hpp')

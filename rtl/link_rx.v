@@ -135,6 +135,159 @@ module link_rx #(
     end
   end
 
+`ifdef FORMAL
+  // ---------------------------------------------------------------------
+  // Properties (scripts/formal.sh link_rx; docs/formal.md). Bytes are free
+  // but come as uart_rx delivers them. As the top of a proof that is
+  // assumed; inside a harness it is asserted.
+`ifdef FORMAL_TOP_link_rx
+`define LRX_ASSUME assume
+`else
+`define LRX_ASSUME assert
+`endif
+`include "crc16_ref.vh"
+
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) `LRX_ASSUME (rst);  // start from reset
+
+  // A byte or a framing error, never both, at least 9 clocks apart (the CRC
+  // takes 8 per byte; uart_rx's proof gives HALF + 9 * DIV + 2).
+  reg [3:0] f_gap = 4'd9;  // clocks since the last one, up to 9
+  always @(posedge clk)
+    f_gap <= (valid_i || ferr_i) ? 4'd1 : (f_gap >= 4'd9) ? 4'd9 : f_gap + 4'd1;
+  always @(*) begin
+    `LRX_ASSUME (!(valid_i && ferr_i));
+    if (valid_i || ferr_i) `LRX_ASSUME (f_gap == 4'd9);
+  end
+
+  // The frame as a reader of docs/protocol.md sees it, by byte position
+  // after SYNC: 0 LEN, 1 SEQ, 2 CMD, 3 .. 2+LEN payload, then the CRC, low
+  // byte first. f_crc: the reference CRC of LEN, SEQ, CMD and the payload
+  // so far. f_quiet: clocks since the last byte of the frame.
+  wire        f_in = st != S_HUNT;  // in a frame: SYNC seen, not dropped yet
+  reg  [ 7:0] f_nb;  // bytes of the frame so far, after SYNC
+  reg  [ 7:0] f_len, f_seq, f_cmd, f_lo;
+  reg  [15:0] f_crc;
+  reg  [TW-1:0] f_quiet;
+  wire        f_stall = f_in && f_quiet == TIMEOUT_T;
+  always @(posedge clk) begin
+    if (!f_in) begin
+      f_nb  <= 8'd0;
+      f_crc <= 16'hFFFF;
+    end else if (valid_i) begin
+      f_nb <= f_nb + 8'd1;
+      if (f_nb == 8'd0) f_len <= byte_i;
+      if (f_nb == 8'd1) f_seq <= byte_i;
+      if (f_nb == 8'd2) f_cmd <= byte_i;
+      if (f_nb >= 8'd3 && f_nb == f_len + 8'd3) f_lo <= byte_i;
+      if (f_nb == 8'd0 || f_nb < f_len + 8'd3) f_crc <= f_crc16_byte(f_crc, byte_i);
+    end
+    f_quiet <= (!f_in || valid_i) ? {TW{1'b0}} : f_stall ? f_quiet : f_quiet + 1'b1;
+  end
+
+  // What each clock's byte or error should lead to, for the next clock.
+  wire f_crc1 = f_in && !f_stall && valid_i && f_nb >= 8'd4 && f_nb == f_len + 8'd4;
+  wire f_good = f_crc1 && {byte_i, f_lo} == f_crc;
+  wire f_bad = f_crc1 && {byte_i, f_lo} != f_crc;
+  wire f_frm = f_in && (f_stall || ferr_i || (valid_i && f_nb == 8'd0 && byte_i > MAXLEN8));
+  wire f_junk = !f_in && (ferr_i || (valid_i && byte_i != P_SYNC));
+  wire [3:0] f_str = {frame_o, crc_err_o, framing_o, junk_o};
+  reg f_good_q, f_bad_q, f_frm_q, f_junk_q, f_rst_q;
+  always @(posedge clk) begin
+    f_good_q <= !rst && f_good;
+    f_bad_q  <= !rst && f_bad;
+    f_frm_q  <= !rst && f_frm;
+    f_junk_q <= !rst && f_junk;
+    f_rst_q  <= rst;
+  end
+
+  always @(*)
+    if (f_past_valid) begin
+      // A frame is accepted exactly when its CRC is good, with the fields
+      // it carried; a bad CRC is counted instead.
+      assert (frame_o == f_good_q);
+      assert (crc_err_o == f_bad_q);
+      if (frame_o) assert (len_o == f_len && seq_o == f_seq && cmd_o == f_cmd && len_o <= MAXLEN8);
+      // LEN above MAX_LEN, a framing error in a frame, or a stall drop the
+      // frame and count; a framing error or a byte other than SYNC while
+      // hunting counts as junk. At most one strobe per clock.
+      assert (framing_o == f_frm_q);
+      assert (junk_o == f_junk_q);
+      assert ((f_str & (f_str - 4'd1)) == 4'd0);
+      // The parser always returns to hunt: a frame never stalls longer
+      // than the byte timeout, nor runs past LEN + 5 bytes; after its last
+      // byte, or a reset, it hunts.
+      if (f_in) assert (f_quiet <= TIMEOUT_T);
+      if (f_in && f_nb != 8'd0) assert (f_nb <= f_len + 8'd4 && f_len <= MAXLEN8);
+      if (frame_o || crc_err_o || framing_o || f_rst_q) assert (st == S_HUNT);
+      // How the registers make that (the induction needs it spelled out).
+      assert (st <= S_CRC1);
+      assert (f_gap <= 4'd9);
+      if (f_in) begin
+        assert (idle == f_quiet);
+        assert ((st == S_LEN) == (f_nb == 8'd0));
+        assert ((st == S_SEQ) == (f_nb == 8'd1));
+        assert ((st == S_CMD) == (f_nb == 8'd2));
+        assert ((st == S_PAY) == (f_nb >= 8'd3 && f_nb < f_len + 8'd3));
+        assert ((st == S_CRC0) == (f_nb >= 8'd3 && f_nb == f_len + 8'd3));
+        if (f_nb >= 8'd1) assert (len_o == f_len);
+        if (f_nb >= 8'd2) assert (seq_o == f_seq);
+        if (f_nb >= 8'd3) assert (cmd_o == f_cmd);
+        if (f_nb >= 8'd1 && f_nb <= 8'd3) assert (idx == 8'd0);
+        if (st == S_PAY) assert (idx == f_nb - 8'd3);
+        if (st == S_CRC1) assert (crc_lo == f_lo);
+        if (f_nb == 8'd0) assert (crc == 16'hFFFF && !crc_busy && f_crc == 16'hFFFF);
+        if (f_nb != 8'd0 && !crc_busy) assert (crc == f_crc);
+      end
+      if (crc_busy && !f_rst_q) assert (f_gap <= 4'd8);
+    end
+
+  // Payload byte f_k, of the solver's choice, reads back after the frame.
+  // (The RAM is left out of the proof of everything else, scripts/formal.sh
+  // link_rx, which is faster without it; link_rx_pay proves these.)
+  /* verilator lint_off UNDRIVEN */
+  (* anyconst *) wire [7:0] f_k;
+  /* verilator lint_on UNDRIVEN */
+  reg [7:0] f_pv;  // its value in this frame
+  reg f_cur = 1'b0;  // it was written in this frame
+  reg f_chk;  // it is on pay_rdata_o now
+  always @(posedge clk) begin
+    if (st == S_LEN) f_cur <= 1'b0;
+    else if (valid_i && st == S_PAY && idx == f_k) f_cur <= 1'b1;
+    if (valid_i && st == S_PAY && idx == f_k) f_pv <= byte_i;
+    f_chk <= f_past_valid && frame_o && pay_raddr_i == f_k && f_k < len_o;
+  end
+  always @(*)
+    if (f_past_valid) begin
+`ifndef FORMAL_NO_PAY_RAM
+      if (f_chk) assert (pay_rdata_o == f_pv);
+      if (f_cur) assert (pay[f_k] == f_pv);
+`endif
+      if (st == S_SEQ || st == S_CMD) assert (!f_cur);
+      if (st == S_PAY) assert (f_cur == (f_k < idx));
+      if (st == S_CRC0 || st == S_CRC1 || frame_o) assert (f_cur == (f_k < len_o));
+    end
+
+`ifdef FORMAL_TOP_link_rx
+`ifdef FORMAL_NO_PAY_RAM
+  // Not vacuous (covers only when this module is the top, and once: with
+  // the RAM out): frames accepted (without payload, and with a payload byte
+  // f_k = 1 read back), a bad CRC, LEN too long, junk.
+  always @(*)
+    if (f_past_valid) begin
+      cover (frame_o && len_o == 8'd0);
+      cover (f_chk && f_k == 8'd1 && f_pv == 8'h5A && cmd_o == 8'h02);
+      cover (crc_err_o);
+      cover (framing_o);
+      cover (junk_o);
+    end
+`endif
+`endif
+
+`undef LRX_ASSUME
+`endif
+
 endmodule
 
 `default_nettype wire

@@ -87,6 +87,110 @@ module mc_safety #(
 
   assign allow_o = {NAXES{armed_o}};
 
+`ifdef FORMAL
+  // ---------------------------------------------------------------------
+  // Properties (scripts/formal.sh mc_safety; docs/formal.md). All inputs are
+  // free: any host command, any pin, in any clock. As the top of a proof the
+  // reset at the start is assumed; inside a harness it is asserted.
+`ifdef FORMAL_TOP_mc_safety
+`define SAFE_ASSUME assume
+`else
+`define SAFE_ASSUME assert
+`endif
+
+  reg f_past_valid = 1'b0;
+  always @(posedge clk) f_past_valid <= 1'b1;
+  always @(*) if (!f_past_valid) `SAFE_ASSUME (rst);  // start from reset
+
+  // f_quiet: clocks armed without a valid frame. f_enc: last clock's
+  // encoder flags (for their rise).
+  reg [23:0] f_quiet;
+  reg [NAXES-1:0] f_enc;
+  always @(posedge clk) begin
+    f_quiet <= (rst || kick_i || !armed_o) ? 24'd0 : f_quiet + 24'd1;
+    f_enc   <= rst ? {NAXES{1'b0}} : enc_err_i;
+  end
+
+  // The causes of each FAULT bit, as docs/protocol.md (Safety) states them,
+  // and the bits that have a cause at all.
+  reg [15:0] f_cause, f_used;
+  always @(*) begin
+    f_cause = 16'd0;
+    f_cause[B_F_WDOG] = armed_o && f_quiet >= wdog_i;  // the watchdog expired
+    f_cause[B_F_ESTOP] = estop_act_o;
+    f_cause[B_F_LIMIT_LSB+:NAXES] = lim_act_o;
+    f_cause[B_F_FERR_LSB+:NAXES] = ferr_i;
+    f_cause[B_F_ENC_LSB+:NAXES] = enc_err_i & ~f_enc;
+    f_used = 16'd0;
+    f_used[B_F_WDOG] = 1'b1;
+    f_used[B_F_ESTOP] = 1'b1;
+    f_used[B_F_LIMIT_LSB+:NAXES] = {NAXES{1'b1}};
+    f_used[B_F_FERR_LSB+:NAXES] = {NAXES{1'b1}};
+    f_used[B_F_ENC_LSB+:NAXES] = {NAXES{1'b1}};
+  end
+
+  reg [15:0] f_cause_q, f_kept_q;  // last clock's causes, and its faults not cleared
+  reg f_rst_q, f_arm_ok_q, f_clr_arm_q, f_armed_q;
+  reg [23:0] f_quiet_q;
+  always @(posedge clk) begin
+    f_quiet_q   <= f_quiet;
+    f_armed_q   <= armed_o;
+    f_cause_q   <= f_cause;
+    f_kept_q    <= fault_o & ~clr_i;
+    f_rst_q     <= rst;
+    f_arm_ok_q  <= arm_set_i && !arm_clr_i && fault_o == 16'd0 && f_cause == 16'd0;
+    f_clr_arm_q <= arm_clr_i;
+  end
+
+  always @(*)
+    if (f_past_valid) begin
+      // The drives run only while armed, and never with a fault latched.
+      assert (allow_o == {NAXES{armed_o}});
+      if (fault_o != 16'd0) assert (!armed_o);
+      // Reset: disarmed, nothing latched.
+      if (f_rst_q) begin
+        assert (!armed_o && fault_o == 16'd0);
+      end else begin
+        // A cause latches its bit and disarms in the next clock; in
+        // particular an expired watchdog (armed, no valid frame for
+        // WDOG clocks) turns the drives off.
+        assert ((fault_o & f_cause_q) == f_cause_q);
+        if (f_cause_q != 16'd0) assert (!armed_o);
+        // A bit stays latched until the host clears it ...
+        assert ((fault_o & f_kept_q) == f_kept_q);
+        // ... and is set only by its cause.
+        assert ((fault_o & ~f_kept_q & ~f_cause_q) == 16'd0);
+        // Arming needs the arm command, no disarm command, no fault
+        // latched and no cause present; a disarm command always disarms.
+        if (armed_o && !f_armed_q) assert (f_arm_ok_q);
+        if (f_clr_arm_q) assert (!armed_o);
+      end
+      // Bits without a cause never set.
+      assert ((fault_o & ~f_used) == 16'd0);
+      // How the registers make that (the induction needs it spelled out).
+      if (armed_o) assert (wd == f_quiet);
+      assert (enc_err_d == f_enc);
+    end
+
+`ifdef FORMAL_TOP_mc_safety
+  // Not vacuous (covers only when this module is the top): the watchdog trips;
+  // a fault latches, holds until cleared, and the axis is armed again after.
+  reg [1:0] f_story;  // 1 armed, 2 then a fault latched, 3 then cleared and armed again
+  always @(posedge clk)
+    if (rst) f_story <= 2'd0;
+    else if (f_story == 2'd0 && armed_o) f_story <= 2'd1;
+    else if (f_story == 2'd1 && fault_o[B_F_LIMIT_LSB] && !armed_o) f_story <= 2'd2;
+    else if (f_story == 2'd2 && armed_o) f_story <= 2'd3;
+  always @(*)
+    if (f_past_valid) begin
+      cover (!f_rst_q && f_kept_q == 16'd0 && fault_o == 16'd1 << B_F_WDOG && f_quiet_q == 24'd5);
+      cover (f_story == 2'd3);
+    end
+`endif
+
+`undef SAFE_ASSUME
+`endif
+
 endmodule
 
 `default_nettype wire

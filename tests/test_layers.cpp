@@ -21,8 +21,8 @@ namespace {
 const std::map<std::string, int>& layers() {
   static const std::map<std::string, int> m = {
       {"hls", 0},         {"host/base", 1},    {"host/gcode", 1},   {"host/link", 2},
-      {"host/motion", 3}, {"host/control", 4}, {"host/machine", 5}, {"sim/plant", 6},
-      {"sim/cosim", 7},   {"sim/vboard", 7},   {"host/cli", 8},
+      {"host/motion", 3}, {"host/control", 4}, {"host/machine", 5}, {"host/grbl", 6},
+      {"sim/plant", 6},   {"sim/cosim", 7},    {"sim/vboard", 7},   {"host/cli", 8},
   };
   return m;
 }

@@ -221,7 +221,7 @@ TEST(Planner, StopDeceleratesAtTheLimitAlongThePath) {
   const Planned p = plan("G1 X100 F6000\nY100\n", c);
   // A piece in the middle of the first move's cruise.
   size_t k = 0;
-  while (p.pieces[k].seg.end[0] < 50 * 400) ++k;
+  while (p.pieces[k].seg.end[0] < int64_t(50) * 400) ++k;
   const auto tail = mc::host::stop_after(p.moves, p.pieces, k, c);
   ASSERT_FALSE(tail.empty());
   EXPECT_TRUE(tail.back().seg.seg.last);
@@ -271,6 +271,51 @@ TEST(Planner, TheDefaultMachineHasThreeAxesAndItsLimits) {
     EXPECT_NE(std::string(e.what()).find("two.nc:2:"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("two.nc:3:"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Contour error against an analytic offset: samples that walk a zig-zag of
+// 0.1 mm moves (a raster like the surface example) with their measured
+// point displaced a known distance across the path.
+TEST(Planner, ContourErrorMeasuresTheDistanceAcrossThePath) {
+  const PlannerConfig c = config();
+  std::ostringstream g;
+  g << "G1 F3000\n";
+  for (int row = 0; row < 6; ++row) {
+    // Z wanders as on a relief, so the walk strays from each chord in 3D.
+    for (int i = 1; i <= 100; ++i)
+      g << "X" << (row % 2 ? 10 - i * 0.1 : i * 0.1) << " Z" << -0.5 + 0.3 * std::sin(i * 0.37) << "\n";
+    g << "Y" << (row + 1) * 1.0 << "\n";
+  }
+  const Planned p = plan(g.str(), c);
+  std::vector<mc::host::JobSample> s;
+  const double off = 0.02;  // mm across the rows (along Y), 8 counts
+  for (const Piece& x : p.pieces) {
+    const Move& m = p.moves[size_t(x.move)];
+    const bool on_row = std::fabs(m.end[1] - m.start[1]) < 1e-9;
+    // Every count the core visits (the walk strays from the chord by up to
+    // a count), as telemetry would sample the command.
+    mc::host::walk(x.seg, [&](const mc::host::Vec3& q) {
+      mc::host::JobSample js;
+      for (size_t k = 0; k < 3; ++k) js.cmd[k] = int32_t(q[k]);
+      js.pos = js.cmd;
+      if (on_row) js.pos[1] += int32_t(off * 400);
+      s.push_back(js);
+    });
+  }
+  const auto e = mc::machine::contour_error(s, p.moves, c);
+  EXPECT_EQ(e.n, s.size());
+  // Samples on the rows are off by 0.02 mm (or less, near a row's end where
+  // the step to the next row is nearer); those on the steps are on the path.
+  // (The command itself strays from the path by up to two counts, 5 um.)
+  const double strays = 2.0 / 400;
+  EXPECT_NEAR(e.max, off, strays);
+  EXPECT_NEAR(e.rms, off, 0.2 * off);
+  for (auto& js : s) js.pos = js.cmd;
+  EXPECT_LT(mc::machine::contour_error(s, p.moves, c).max, strays);
 }
 
 }  // namespace

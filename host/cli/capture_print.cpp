@@ -1,5 +1,9 @@
 #include "host/cli/capture_print.hpp"
 
+#include <algorithm>
+
+#include <sstream>
+
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -74,6 +78,34 @@ std::string watchdog_text(const BoardState& s) {
   std::snprintf(b, sizeof b, "%s (WDOG = %u cycles)", format_duration(double(s.wdog) / s.clk_hz).c_str(),
                 unsigned(s.wdog));
   return b;
+}
+
+void plot_xy(const std::string& out, const std::string& title, const std::vector<XySeries>& series) {
+  std::ostringstream g;
+  g << "set terminal pngcairo size 1000,800\nset output '" << out << "'\n"
+    << "set title '" << title << "'\n"
+    << "set xlabel 'X (mm)'\nset ylabel 'Y (mm)'\nset size ratio -1\nset key outside\n";
+  for (size_t i = 0; i < series.size(); ++i) g << "$d" << i << " << EOD\n" << series[i].data << "EOD\n";
+  g << "plot ";
+  for (size_t i = 0; i < series.size(); ++i)
+    g << (i ? ", " : "") << "$d" << i << " using 1:2 with " << series[i].style << " title '"
+      << series[i].title << "'";
+  g << "\n";
+  run_gnuplot_script(g.str(), out);
+}
+
+std::string moves_xy(const std::vector<mc::host::Move>& moves, bool rapid) {
+  std::ostringstream d;
+  for (const mc::host::Move& mv : moves) {
+    if (!mv.is_motion() || mv.rapid != rapid) continue;
+    const int n = mv.kind == mc::host::Move::Kind::arc ? std::max(2, int(std::ceil(mv.sweep / 0.02))) : 1;
+    for (int i = 0; i <= n; ++i) {
+      const mc::host::Vec3d p = mc::host::point_at(mv, mv.length * i / n);
+      d << p[0] << ' ' << p[1] << '\n';
+    }
+    d << "\n";
+  }
+  return d.str();
 }
 
 }  // namespace mc::host::cli

@@ -2,9 +2,12 @@
 // and JSON, gains on one line, and the machine's scale of an axis.
 #pragma once
 
+#include "host/motion/planner.hpp"
+
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "host/control/pid_design.hpp"
 #include "host/control/step_metrics.hpp"
@@ -29,5 +32,16 @@ std::string gains_line(const PidGains& g);
 std::string watchdog_text(const BoardState& s);
 // Runs gnuplot on `script`; `what` names the output in the error.
 void run_gnuplot_script(const std::string& script, const std::string& what);
+
+// A curve of an XY plot: gnuplot data ("x y" lines, a blank line between
+// pieces), its key title and its gnuplot style ("lines dt 2 lc rgb '#d62728'").
+struct XySeries {
+  std::string title, data, style;
+};
+// A PNG of the series on equal X and Y scales (mm), through gnuplot.
+void plot_xy(const std::string& out, const std::string& title, const std::vector<XySeries>& series);
+// The XY points of the motion moves (arcs sampled every 0.02 rad), rapids
+// or not as `rapid` says.
+std::string moves_xy(const std::vector<mc::host::Move>& moves, bool rapid);
 
 }  // namespace mc::host::cli

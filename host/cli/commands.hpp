@@ -23,5 +23,8 @@ void add_gains_commands(CLI::App& app);
 void add_step_commands(CLI::App& app);
 void add_tune_command(CLI::App& app);
 void add_hostloop_command(CLI::App& app);
+void add_gcode_command(CLI::App& app);
+void add_run_command(CLI::App& app);
+void add_serve_command(CLI::App& app);
 
 }  // namespace mc::host::cli

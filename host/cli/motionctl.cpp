@@ -11,6 +11,7 @@
 #include "host/base/errors.hpp"
 #include "host/cli/board_cli.hpp"
 #include "host/cli/commands.hpp"
+#include "host/machine/job.hpp"
 
 namespace {
 
@@ -71,6 +72,9 @@ int run(int argc, char** argv) {
   mc::host::cli::add_step_commands(app);
   mc::host::cli::add_tune_command(app);
   mc::host::cli::add_hostloop_command(app);
+  mc::host::cli::add_gcode_command(app);
+  mc::host::cli::add_run_command(app);
+  mc::host::cli::add_serve_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");
@@ -101,6 +105,13 @@ int main(int argc, char** argv) {
   // Commands run inside parse() (CLI11 callbacks), so their errors arrive here.
   try {
     return run(argc, argv);
+  } catch (const mc::machine::ProgramErrors& e) {
+    // Every error of the program, one per line as compilers print them (an
+    // editor jumps to each), then the one summary line.
+    for (const auto& err : e.errors()) std::cerr << err.format() << '\n';
+    const auto& first = e.errors().front();
+    return fail(std::to_string(e.errors().size()) + " error(s) in " + first.file + "; nothing was run",
+                kExitUsage);
   } catch (const mc::host::InputError& e) {
     return fail(e.what(), kExitUsage);
   } catch (const std::exception& e) {

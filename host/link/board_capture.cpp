@@ -21,6 +21,10 @@ extern "C" void on_interrupt(int) {
 }
 }  // namespace
 
+const std::atomic<bool>& interrupt_requested() {
+  return g_interrupted;
+}
+
 void catch_interrupts() {
   struct sigaction sa {};
   sa.sa_handler = on_interrupt;

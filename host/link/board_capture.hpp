@@ -4,6 +4,7 @@
 // keeping the board's watchdog fed while the capture runs.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <stdexcept>
@@ -33,6 +34,8 @@ class Interrupted : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 void catch_interrupts();
+// The flag those handlers set, for loops that stop on it themselves.
+const std::atomic<bool>& interrupt_requested();
 
 // One sample of one axis, as the telemetry frame carries it.
 struct TlmSample {

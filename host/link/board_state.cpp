@@ -132,10 +132,11 @@ void require_enabled(BoardLink& l, int a) {
                      "an enabled axis: run 'motionctl enable --axis " + letter(a) + "' first");
 }
 
-void enable_axes(BoardLink& l, const std::vector<int>& axes, const Note& note) {
+std::array<int64_t, 3> enable_axes(BoardLink& l, const std::vector<int>& axes, const Note& note) {
   for (int a : axes) require_gains(l, a);
-  arm(l, note);
+  const std::array<int64_t, 3> at = arm(l, note);
   for (int a : axes) l.write_verify(pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1, 1);
+  return at;
 }
 
 void disable_axes(BoardLink& l, const std::vector<int>& axes, bool drives_off) {

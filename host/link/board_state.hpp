@@ -67,7 +67,9 @@ void require_gains(BoardLink& l, int a);
 // InputError unless axis a's PID is enabled.
 void require_enabled(BoardLink& l, int a);
 // Checks every axis has gains, arms the drives, then enables the axes' PIDs.
-void enable_axes(BoardLink& l, const std::vector<int>& axes, const Note& note);
+// Returns the interpolator position, as arm() does (AX_CMD reads the new
+// position only from the next sample on).
+std::array<int64_t, 3> enable_axes(BoardLink& l, const std::vector<int>& axes, const Note& note);
 // Disables the axes' PIDs; with drives_off, first turns the drives off.
 void disable_axes(BoardLink& l, const std::vector<int>& axes, bool drives_off);
 // Clears the latched faults; returns what was latched (0: none). BoardError

@@ -133,4 +133,19 @@ int load_gains(mc::host::BoardLink& l, const GainsFile& f, const std::string& fi
   return int(f.axes.size());
 }
 
+int gains_where_missing(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note) {
+  int n = 0;
+  for (size_t a = 0; a < m.axes.size(); ++a) {
+    mc::host::AxisGains cur = mc::host::read_gains(l, int(a));
+    if (cur.gains.kp != 0 || cur.gains.ki != 0) continue;
+    const PidConfig& p = m.axes[a].pid;
+    cur.limits.out_limit = uint32_t(std::lround(p.out_limit));
+    mc::host::apply_gains(l, int(a), mc::host::PidGains{p.kp, p.ki, p.kd, p.tf_s, p.ts_s, p.ff1, p.ff2},
+                          cur.limits, note);
+    if (note) note("axis " + m.axes[a].name + " had no gains: loaded those of " + m.source);
+    ++n;
+  }
+  return n;
+}
+
 }  // namespace mc::machine

@@ -8,6 +8,7 @@
 
 #include "host/control/board_gains.hpp"
 #include "host/link/board_link.hpp"
+#include "host/machine/machine_config.hpp"
 
 namespace mc::machine {
 
@@ -31,5 +32,10 @@ int save_gains(mc::host::BoardLink& l, const std::string& path);
 // returns how many axes it loaded.
 int load_gains(mc::host::BoardLink& l, const GainsFile& f, const std::string& path,
                const mc::host::Note& warn);
+
+// Gives every axis of the machine that has no gains on the board (Kp = Ki =
+// 0, as after power-up) the machine config's, with a note for each; axes
+// with gains keep them. Returns how many axes it wrote.
+int gains_where_missing(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note);
 
 }  // namespace mc::machine

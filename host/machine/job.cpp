@@ -84,17 +84,22 @@ mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& sampl
   for (const mc::host::JobSample& s : samples) {
     mc::host::Vec3 c{s.cmd[0], s.cmd[1], s.cmd[2]}, p{s.pos[0], s.pos[1], s.pos[2]};
     const Vec3d cmd = mc::host::to_mm(c, cfg), pos = mc::host::to_mm(p, cfg);
-    // Advance while a later move holds the command (within a count's reach).
+    // The move the command is on: the nearest in a window ahead (the
+    // command lies on the path to a count or two; at a junction both moves
+    // hold it and the later one wins).
+    size_t best = at;
+    double dbest = std::numeric_limits<double>::infinity();
     for (size_t k = at; k < path.size() && k < at + 64; ++k) {
-      if (mc::host::distance_to(moves[path[k]], cmd) <= cell) {
-        at = k;
-        // Prefer the latest move that holds it: at a junction both do.
-        while (at + 1 < path.size() && mc::host::distance_to(moves[path[at + 1]], cmd) <= cell &&
-               mc::host::distance_to(moves[path[at]], moves[path[at + 1]].start) <= cell)
-          ++at;
-        break;
+      const double d = mc::host::distance_to(moves[path[k]], cmd);
+      if (d <= dbest + 1e-12) {
+        best = k;
+        dbest = d;
       }
+      if (d > dbest + 100 * cell) break;  // well past it
     }
+    if (dbest < 4 * cell) at = best;
+    // Rapids are not cutting: how they are followed is the following error's.
+    if (moves[path[at]].rapid) continue;
     // The measured point lags the command: look around the command's move.
     double d = std::numeric_limits<double>::infinity();
     const size_t lo = at >= 8 ? at - 8 : 0, hi = std::min(path.size(), at + 9);

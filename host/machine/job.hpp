@@ -64,7 +64,7 @@ struct JobReport {
 
 // Contour error of the samples (counts) against the path of the moves:
 // each sample's distance from the nearest move around the one its command
-// lies on.
+// lies on; samples whose command is on a rapid are left out.
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
                                    const std::vector<mc::host::Move>& moves,
                                    const mc::host::PlannerConfig& cfg);

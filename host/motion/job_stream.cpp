@@ -89,6 +89,7 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
   std::vector<Piece> pieces = input;
   uint32_t decim = o.telemetry_decim;
   if (o.telemetry_axes && decim == 0) {
+    if (!(o.ts_s > 0)) throw InputError("sample period", format_number(o.ts_s) + " s", "above 0");
     int n = 0;
     for (unsigned m = o.telemetry_axes; m; m >>= 1) n += int(m & 1);
     const double baud = double(l.read(br::BAUD));

@@ -261,7 +261,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
     m.exact_stop = exact;
     m.deviation_mm = deviation;
     if (m.is_motion()) check_travel(m);
-    out.push_back(std::move(m));
+    out.push_back(m);
   };
   auto line_move = [&](int line, const Vec3d& to, bool rapid, double feed_mm_s) {
     check_axes(line, at, to);
@@ -274,7 +274,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
     m.length = norm(sub(to, at));
     m.v_nominal = feed_mm_s;
     at = to;
-    if (m.length > 1e-9) push(std::move(m));
+    if (m.length > 1e-9) push(m);
   };
   auto require_feed = [&](int line, double feed_mm_min) {
     if (!(feed_mm_min > 0) || !std::isfinite(feed_mm_min))
@@ -316,7 +316,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
             if (whole) {
               m.length = m.radius * m.sweep;
               at = op.end;
-              push(std::move(m));
+              push(m);
               return;
             }
             // A helix or an arc on axes of unequal scale: chords within the
@@ -336,7 +336,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
             m.line = c.line;
             m.start = m.end = at;
             m.dwell_s = op.seconds;
-            push(std::move(m));
+            push(m);
           } else if constexpr (std::is_same_v<T, gcode::StraightProbe>) {
             throw InputError(line_ref(file, c.line) + ": G38", "a probing move",
                              "no probing in a job: probe with the probing cycle (the machine-cycles work)",
@@ -354,7 +354,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
             m.line = c.line;
             m.start = m.end = at;
             m.action = c.op;
-            push(std::move(m));
+            push(m);
           }
         },
         c.op);
@@ -696,7 +696,9 @@ std::array<double, 3> peak_accel(const std::vector<Piece>& pieces, const Planner
   for (size_t k = 0; k < 3; ++k) {
     if (!cfg.axes[k].present) continue;
     size_t i0 = 0, i1 = 0, i2 = 0;
-    for (double t = kt.front(); t <= kt.back(); t += h) {
+    const auto steps = int64_t((kt.back() - kt.front()) / h);
+    for (int64_t n = 0; n <= steps; ++n) {
+      const double t = kt.front() + double(n) * h;
       const double a = (at(t + w, i2, k) - 2 * at(t, i1, k) + at(t - w, i0, k)) / (w * w);
       const double v = std::fabs(a) / cfg.axes[k].counts_per_mm;
       if (v > peak[k]) {

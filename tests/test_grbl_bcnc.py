@@ -1,0 +1,147 @@
+#!/usr/bin/python3
+# bCNC (Debian's package) drives `motionctl serve`: its Sender with the GRBL1
+# controller class, without a display, streams a job to the serve's
+# pseudo-terminal and then to socket://127.0.0.1:PORT, with a feed hold, a
+# resume and a feed override in the middle, and must end with every line
+# acknowledged, no error and the machine at the job's end point.
+#
+# usage: /usr/bin/python3 test_grbl_bcnc.py MOTIONCTL
+# Debian's python3 on purpose: bCNC needs Debian's tk and pyserial.
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+BCNC = "/usr/share/bcnc/bCNC"
+if not os.path.isdir(BCNC):
+    print("bCNC is not installed: run scripts/deps.sh (it installs Debian's bcnc)")
+    sys.exit(1)
+motionctl = sys.argv[1]
+work = tempfile.mkdtemp(prefix="mc_bcnc_")
+os.environ["HOME"] = work  # bCNC reads and writes ~/.bCNC
+sys.path[:0] = [BCNC, BCNC + "/lib", BCNC + "/plugins", BCNC + "/controllers"]
+
+import Utils  # noqa: E402
+
+Utils.loadConfiguration()
+from CNC import CNC, WAIT  # noqa: E402
+from Sender import Sender  # noqa: E402
+
+# Only a guard: every wait below ends on what bCNC parsed from the server.
+GUARD_S = 120
+
+
+class Headless(Sender):
+    """The sender of bCNC's application, less its window."""
+
+    def disable(self):
+        pass
+
+    def enable(self):
+        pass
+
+
+def wait_for(what, pred):
+    t0 = time.time()
+    while not pred():
+        if time.time() - t0 > GUARD_S:
+            raise AssertionError("timed out waiting for " + what + "; state " + str(CNC.vars["state"]))
+        time.sleep(0.02)
+
+
+def job():
+    lines = ["G21 G90 G94", "G0 X0 Y0 Z0", "G1 X20 F600", "G2 X30 Y10 I0 J10", "G1 Y30", "G3 X20 Y40 I-10 J0"]
+    for i in range(200):
+        lines.append("G1 X%.1f Y%s F3000" % (20 - 0.1 * (i + 1), "40" if i % 2 else "39.5"))
+    lines += ["G1 X0 Y40 F1200", "G1 Y0", "G0 X12.5 Y7.5"]
+    return lines
+
+
+def run(device):
+    s = Headless()
+    errors = []
+    received = []
+    s.open(device, 115200)
+    wait_for("the first status report", lambda: CNC.vars["state"] == "Idle")
+    lines = job()
+    # bCNC.Application.run() with the lines given, less its window.
+    s.initRun()
+    s._runLines = sys.maxsize
+    s._gcount = 0
+    CNC.vars["running"] = True
+    n = 1  # the closing WAIT
+    for line in CNC.compile(lines):
+        if line is not None:
+            s.queue.put(line + "\n" if isinstance(line, str) else line)
+            n += 1
+    s._runLines = n
+    s.queue.put((WAIT,))
+
+    def drain_log():
+        while not s.log.empty():
+            kind, text = s.log.get()
+            if kind == Sender.MSG_ERROR or re.match(r"(error|ALARM)", str(text)):
+                errors.append(text)
+            if kind == Sender.MSG_OK:
+                received.append(text)
+        return errors
+
+    wait_for("the job to run", lambda: CNC.vars["state"] == "Run" and not drain_log())
+    wait_for("20 lines acknowledged", lambda: len(drain_log()) == 0 and len(received) > 20)
+    s.feedHold()
+    wait_for("Hold:0", lambda: CNC.vars["state"] == "Hold:0")
+    held = (CNC.vars["mx"], CNC.vars["my"])
+    # Nothing to wait on for "nothing moves": bCNC asks `?` every 125 ms, so
+    # half a second is four reports while held.
+    time.sleep(0.5)
+    assert CNC.vars["state"] == "Hold:0" and (CNC.vars["mx"], CNC.vars["my"]) == held, \
+        "moved while held: %s -> %s" % (held, (CNC.vars["mx"], CNC.vars["my"]))
+    print("%s: held at X%.3f Y%.3f" % (device, held[0], held[1]))
+    s.resume()
+    wait_for("Run after the resume", lambda: CNC.vars["state"] == "Run")
+    CNC.vars["_OvFeed"] = 110
+    CNC.vars["_OvChanged"] = True
+    wait_for("Ov: 110", lambda: CNC.vars["OvFeed"] == 110)
+    wait_for("the end of the job",
+             lambda: not drain_log() and s._gcount >= s._runLines and CNC.vars["state"] == "Idle")
+    end = (CNC.vars["mx"], CNC.vars["my"], CNC.vars["mz"])
+    print("%s: %d/%d lines done, feed override %d %%, machine at %s" %
+          (device, s._gcount, s._runLines, CNC.vars["OvFeed"], end))
+    s.runEnded()
+    s.close()
+    assert not errors, "errors: %s" % errors
+    assert end == (12.5, 7.5, 0.0), "ended at %s, not X12.5 Y7.5 Z0" % (end,)
+
+
+def main():
+    link = os.path.join(work, "motioncore")
+    serve = subprocess.Popen([motionctl, "serve", "--dry-run", "--pty", link, "--tcp", "0", "--settings",
+                              os.path.join(work, "grbl.toml")], stdout=subprocess.PIPE, text=True)
+    try:
+        out = ""
+        while "Ctrl-C stops." not in out:
+            line = serve.stdout.readline()
+            if not line:
+                raise AssertionError("motionctl serve stopped: " + out)
+            out += line
+        port = int(re.search(r"tcp: +127\.0\.0\.1:(\d+)", out).group(1))
+        run(link)
+        run("socket://127.0.0.1:%d" % port)
+        print("PASS: bCNC ran the job on the PTY and over TCP")
+        return 0
+    except AssertionError as e:
+        print("FAIL: %s" % e)
+        return 1
+    finally:
+        serve.terminate()
+        serve.wait()
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stdout.flush()
+    os._exit(code)  # bCNC's serial thread is not a daemon

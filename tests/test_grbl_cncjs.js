@@ -1,0 +1,190 @@
+// cncjs 1.11.5 drives `motionctl serve`: its server runs headless on
+// 127.0.0.1 with a config file of ours, this script talks to it as its web
+// page would (socket.io, a token signed with the config's secret), opens the
+// serve's pseudo-terminal as a Grbl port, loads a job, starts it, holds and
+// resumes it, raises the feed override, and waits until the workflow is idle
+// with every line acknowledged and the machine at the job's end point.
+//
+// usage: node test_grbl_cncjs.js MOTIONCTL CNCJS_DIR
+//   CNCJS_DIR: where scripts/deps.sh installed cncjs (node_modules/cncjs).
+'use strict';
+
+const { spawn } = require('child_process');
+const fs = require('fs');
+const net = require('net');
+const os = require('os');
+const path = require('path');
+
+const [motionctl, cncjsDir] = process.argv.slice(2);
+const modules = path.join(cncjsDir || '', 'node_modules');
+if (!motionctl || !fs.existsSync(path.join(modules, 'cncjs', 'package.json'))) {
+  console.error(`cncjs is not installed in ${cncjsDir}: run scripts/deps.sh (it installs cncjs 1.11.5 from npm)`);
+  process.exit(1);
+}
+const io = require(path.join(modules, 'socket.io-client'));
+const jwt = require(path.join(modules, 'jsonwebtoken'));
+
+const work = fs.mkdtempSync(path.join(os.tmpdir(), 'mc_cncjs_'));
+const link = path.join(work, 'motioncore');
+const children = [];
+let failed = false;  // set once the run is decided: children's exits no longer count
+let dump = () => '';
+
+function finish(code, why) {
+  failed = true;
+  if (why) console.log(why);
+  for (const c of children) c.kill('SIGTERM');
+  setTimeout(() => {
+    fs.rmSync(work, { recursive: true, force: true });
+    process.exit(code);
+  }, 300);
+}
+function fail(why) {
+  if (failed) return;
+  finish(1, `FAIL: ${why}\n${dump()}`);
+}
+// Only a guard: every step below waits on an event from cncjs.
+setTimeout(() => fail('the job did not finish within 120 s'), 120000).unref();
+
+function freePort() {
+  return new Promise((resolve) => {
+    const s = net.createServer().listen(0, '127.0.0.1', () => {
+      const { port } = s.address();
+      s.close(() => resolve(port));
+    });
+  });
+}
+
+// Waits for `proc` to print a line matching `re` on stdout.
+function waitOutput(proc, re, what) {
+  return new Promise((resolve) => {
+    let text = '';
+    proc.stdout.on('data', (d) => {
+      text += d.toString();
+      if (re.test(text)) resolve(text);
+    });
+    proc.on('exit', (code) => fail(`${what} exited (${code}) before it was ready:\n${text}`));
+  });
+}
+
+// The job: lines, arcs, 200 short segments (character counting under load),
+// ending at X12.5 Y7.5 Z0.
+function job() {
+  const l = ['G21 G90 G94', 'G0 X0 Y0 Z0', 'G1 X20 F600', 'G2 X30 Y10 I0 J10', 'G1 Y30', 'G3 X20 Y40 I-10 J0'];
+  for (let i = 0; i < 200; ++i) l.push(`G1 X${(20 - 0.1 * (i + 1)).toFixed(1)} Y${i % 2 ? 40 : 39.5} F3000`);
+  l.push('G1 X0 Y40 F1200', 'G1 Y0', 'G0 X12.5 Y7.5');
+  return l.join('\n') + '\n';
+}
+
+async function main() {
+  const serve = spawn(motionctl, ['serve', '--dry-run', '--pty', link, '--settings', path.join(work, 'grbl.toml')]);
+  children.push(serve);
+  serve.stderr.on('data', (d) => process.stderr.write(`serve: ${d}`));
+  await waitOutput(serve, /Ctrl-C stops/, 'motionctl serve');
+
+  const secret = 'motioncore-test-secret';
+  const config = path.join(work, 'cncrc.json');
+  fs.writeFileSync(config, JSON.stringify({
+    secret,
+    ports: [{ path: link, manufacturer: 'MotionCore' }],
+    state: { checkForUpdates: false, allowAnonymousUsageDataCollection: false },
+  }));
+  const port = await freePort();
+  const cncjs = spawn(process.execPath, [path.join(modules, 'cncjs', 'bin', 'cncjs'), '--host', '127.0.0.1',
+    '--port', String(port), '--config', config], { env: { ...process.env, HOME: work } });
+  children.push(cncjs);
+  cncjs.stderr.on('data', (d) => process.stderr.write(`cncjs: ${d}`));
+  cncjs.stdout.on('data', () => {});
+  cncjs.on('exit', (code) => fail(`cncjs exited (${code})`));
+
+  // socket.io retries until cncjs listens.
+  const token = jwt.sign({ id: '', name: 'motioncore-test' }, secret, { expiresIn: '1h' });
+  const socket = io.connect(`ws://127.0.0.1:${port}`, { query: `token=${token}` });
+  socket.on('error', (e) => fail(`socket.io: ${e}`));
+
+  let state = {};        // the last Grbl status cncjs parsed
+  let sender = {};       // the last sender status
+  let workflow = '';
+  const reads = [];      // every line cncjs read from the port
+  const waiters = [];
+  dump = () => `workflow ${workflow}, state ${JSON.stringify(state)}, sender ${JSON.stringify(sender)}, ` +
+    `last lines read: ${JSON.stringify(reads.slice(-12))}`;
+  const check = () => {
+    for (let i = waiters.length; i-- > 0;) {
+      if (waiters[i].pred()) waiters.splice(i, 1)[0].resolve();
+    }
+  };
+  const until = (pred) => new Promise((resolve) => { waiters.push({ pred, resolve }); check(); });
+  socket.on('controller:state', (type, s) => {
+    state = (s && s.status) || {};
+    check();
+  });
+  socket.on('sender:status', (s) => { sender = s; check(); });
+  socket.on('workflow:state', (w) => { workflow = w; check(); });
+  socket.on('serialport:write', (d) => { if (process.env.MC_DEBUG) console.log('write', JSON.stringify(d)); });
+  socket.on('serialport:read', (line) => {
+    if (process.env.MC_DEBUG) console.log('read', JSON.stringify(line));
+    reads.push(line);
+    if (/^(error|ALARM)/.test(line)) fail(`the server answered "${line}"`);
+    check();
+  });
+
+  await new Promise((resolve) => socket.on('connect', resolve));
+  await new Promise((resolve) => socket.emit('open', link, { controllerType: 'Grbl', baudrate: 115200 }, (err) => {
+    if (err) fail(`cncjs could not open ${link}: ${err}`);
+    resolve();
+  }));
+  await until(() => state.activeState === 'Idle');
+  console.log(`cncjs opened ${link}: Idle`);
+
+  const text = job();
+  const lines = text.trim().split('\n').length;
+  await new Promise((resolve) => socket.emit('command', link, 'gcode:load', 'job.nc', text, {}, (err) => {
+    if (err) fail(`gcode:load: ${err}`);
+    resolve();
+  }));
+  socket.emit('command', link, 'gcode:start');
+  await until(() => workflow === 'running' && state.activeState === 'Run');
+  console.log(`running ${lines} lines (+ cncjs's closing %wait)`);
+
+  // A feed hold in the middle: Hold:0 and standing still, then resume.
+  await until(() => sender.received > 10);
+  socket.emit('command', link, 'feedhold');
+  await until(() => state.activeState === 'Hold' && state.subState === 0);
+  // Standing still: four more reports asked for through cncjs show the same position.
+  const report = async () => {
+    const n = reads.length;
+    socket.emit('write', link, '?');
+    await until(() => reads.slice(n).some((r) => r.startsWith('<')));
+    return reads.slice(n).find((r) => r.startsWith('<'));
+  };
+  const mpos = (r) => (/MPos:([^|>]*)/.exec(r) || [])[1];
+  const held = mpos(await report());
+  for (let i = 0; i < 4; ++i) {
+    const r = await report();
+    if (!r.startsWith('<Hold:0|') || mpos(r) !== held) {
+      fail(`moved while held: MPos ${held} -> ${r}`);
+      return;
+    }
+  }
+  console.log(`held at MPos ${held} after ${sender.received} lines acknowledged`);
+  socket.emit('command', link, 'cyclestart');
+  await until(() => state.activeState === 'Run');
+
+  // Feed override +10 %: the report shows it.
+  socket.emit('command', link, 'feedOverride', 10);
+  await until(() => state.ov && Number(state.ov[0]) === 110);
+  console.log('feed override 110 %');
+
+  await until(() => workflow === 'idle' && sender.total > 0 && sender.received === sender.total &&
+    state.activeState === 'Idle');
+  const end = state.mpos;
+  console.log(`done: ${sender.received}/${sender.total} lines acknowledged, machine at ${JSON.stringify(end)}`);
+  if (Number(end.x) !== 12.5 || Number(end.y) !== 7.5 || Number(end.z) !== 0) {
+    fail(`the machine ended at ${JSON.stringify(end)}, not at X12.5 Y7.5 Z0`);
+    return;
+  }
+  finish(0, 'PASS: cncjs ran the job to its end on motionctl serve');
+}
+
+main().catch((e) => fail(e.stack || String(e)));
