@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -89,6 +90,21 @@ inline void expect_one_error_line(const std::vector<std::string>& args, const st
   if (!mentions.empty()) {
     EXPECT_NE(r.err.find(mentions), std::string::npos) << cmd << "\n" << r.err;
   }
+}
+
+// Runs a command that must succeed, with its arguments in the failure message.
+inline void expect_ok(const std::vector<std::string>& args) {
+  const Result r = run(args);
+  std::string cmd;
+  for (const auto& a : args) cmd += " " + a;
+  ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.err;
+}
+
+// A command's --json output (a failed command or bad JSON: a failure, and discarded).
+inline nlohmann::json run_json(const std::vector<std::string>& args) {
+  const Result r = run(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return nlohmann::json::parse(r.out, nullptr, false);
 }
 
 }  // namespace mc::test

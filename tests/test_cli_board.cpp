@@ -27,19 +27,6 @@ namespace {
 
 using nlohmann::json;
 
-json run_json(const std::vector<std::string>& args) {
-  const Result r = run(args);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return json::parse(r.out);
-}
-
-void expect_ok(const std::vector<std::string>& args) {
-  const Result r = run(args);
-  std::string cmd;
-  for (const auto& a : args) cmd += " " + a;
-  ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.err;
-}
-
 void expect_near_rel(double got, double want, const char* what) {
   EXPECT_NEAR(got, want, 1e-5 * std::fabs(want) + 1e-12) << what;
 }

@@ -134,6 +134,9 @@ TEST(CliPlant, BadInputIsOneErrorLine) {
   };
   expect_one_error_line(with({"--duration", "-0.2"}), "--duration");
   expect_one_error_line(with({"--duration", "0"}), "--duration");
+  // Bounded (issue 18): 1e9 s of plant time is a typo, not an experiment.
+  expect_one_error_line(with({"--duration", "1e9"}),
+                        "--duration = \"1e9\": above the range; expected 0..100 s");
   expect_one_error_line(with({"--duration", "0.2", "--config", "/nonexistent/m.toml"}),
                         "/nonexistent/m.toml");
   expect_one_error_line(with({"--duration", "0.2", "--axis", "w"}), "x, y");

@@ -239,6 +239,62 @@ TEST(SimConfig, OutOfRangeValuesAreErrors) {
   expect_error(edit("machine", "plant_dt_s", "plant_dt_s = nan"), "machine.plant_dt_s", "a number > 0");
 }
 
+// Values no board or small machine can have are refused with the file and
+// line, before a simulation or a board is set up with them (issue 18:
+// clock_hz = 1e15 used to be accepted and left `sim serve` deaf to signals).
+TEST(SimConfig, PhysicallyAbsurdValuesAreErrors) {
+  expect_error(edit("machine", "clock_hz", "clock_hz = 1e15"), "machine.clock_hz",
+               "up to 167772150 (the watchdog");
+  expect_error(edit("machine", "clock_hz", "clock_hz = 1e3"), "machine.clock_hz", "at least 2000000 Hz");
+  expect_error(edit("machine", "plant_dt_s", "plant_dt_s = 1.5e-7"), "machine.plant_dt_s",
+               "a whole number of at least 2 clock cycles");
+  expect_error(edit("machine", "plant_dt_s", "plant_dt_s = 1e-3"), "machine.plant_dt_s",
+               "at most the axes' sample period (axis.x.pid.ts_s = 0.0001 s)");
+  expect_error(edit("host_loop", "period_s", "period_s = 3600"), "host_loop.period_s", "up to 1");
+  expect_error(edit("axis.x", "lead_m_per_rev", "lead_m_per_rev = 5"), "axis.x.lead_m_per_rev", "up to 1");
+  expect_error(edit("axis.x.motor", "inductance_h", "inductance_h = 0.33e3"), "axis.x.motor.inductance_h",
+               "above the range");
+  expect_error(edit("axis.y.drive", "supply_v", "supply_v = 48e3"), "axis.y.drive.supply_v", "up to 1000");
+  // 1 m of following error is 400000 counts: more than FERR's 16 bits hold.
+  expect_error(edit("axis.x", "max_following_error_m", "max_following_error_m = 1"),
+               "axis.x.max_following_error_m", "65535 counts");
+  expect_error(edit("axis.x", "max_following_error_m", "max_following_error_m = 1e-7"),
+               "axis.x.max_following_error_m", "at least one encoder count");
+  // 750 000 iterations/s at 12 MHz over 400 000 counts/m: 1.875 m/s.
+  expect_error(edit("axis.x", "max_speed_m_s", "max_speed_m_s = 5"), "axis.x.max_speed_m_s", "up to 1.875");
+  expect_error(edit("axis.x", "travel_max_m", "travel_max_m = -0.4"), "axis.x.travel_max_m",
+               "travel_max_m > travel_min_m = -0.3");
+  expect_error(edit("axis.y", "travel_min_m", "travel_min_m = -1e4"), "axis.y.travel_min_m",
+               "within the board's 32-bit positions");
+  // The PID: Ts the core runs (its 70-cycle sweep .. 10 ms), Kp it realizes as a controller.
+  expect_error(edit("axis.x.pid", "ts_s", "ts_s = 1e-6"), "axis.x.pid.ts_s", "too short");
+  expect_error(edit("axis.x.pid", "ts_s", "ts_s = 10"), "axis.x.pid.ts_s", "to 10 ms");
+  expect_error(edit("axis.x.pid", "kp", "kp = 8000000"), "axis.x.pid.kp", "0..32767");
+}
+
+// Where the board's 32-bit counters reach less than the +-1 m default (a
+// 2^24-count encoder on a 1 mm lead: 16.8e9 counts/m), the default is what
+// they reach.
+TEST(SimConfig, DefaultTravelStaysWithinTheCounters) {
+  std::string text(default_machine_toml());
+  const auto y = text.find("[axis.y]");
+  const auto set = [&](const std::string& key, const std::string& value) {
+    const auto at = text.find("\n" + key + " ", y) + 1;
+    text.replace(at, text.find('\n', at) - at, value.empty() ? "" : key + " = " + value);
+  };
+  set("lead_m_per_rev", "0.001");
+  set("encoder_counts_per_rev", "16777216");
+  set("max_following_error_m", "1e-6");  // 16777 counts: within FERR
+  set("max_speed_m_s", "1e-5");          // within the interpolator's rate at this scale
+  set("travel_min_m", "");
+  set("travel_max_m", "");
+  const MachineConfig m = parse_machine(text, "fine.toml");
+  const double reach = 2147483647.0 / (16777216 / 0.001);
+  EXPECT_DOUBLE_EQ(m.axes[1].travel_max_m, reach);
+  EXPECT_DOUBLE_EQ(m.axes[1].travel_min_m, -reach);
+  EXPECT_EQ(m.axes[0].travel_max_m, 0.3);
+}
+
 TEST(SimConfig, StructureErrors) {
   const std::string text0(default_machine_toml());
   expect_error({text0 + "[axis.w]\nlead_m_per_rev = 0.005\n", int(lines_of(text0).size()) + 1}, "axis.w",

@@ -41,7 +41,8 @@ class InputError : public std::invalid_argument {
 // Numbers in messages: enough digits to show what went wrong, no more.
 std::string format_number(double v);
 
-// Text in messages: double-quoted, with control characters escaped so that the
+// Text in messages: double-quoted, control characters and bytes that are not
+// UTF-8 escaped (\xNN), cut after 200 bytes with the length said, so that the
 // message stays on one line.
 std::string quote(std::string_view text);
 

@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "host/base/errors.hpp"
+#include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
 
@@ -82,8 +83,24 @@ std::optional<SimServer> read_state() {
   return s;
 }
 
+// The first "motionctl: error: " line the log got after byte `from`, without the prefix.
+std::string error_in_log(const std::string& log, std::streamoff from) {
+  std::ifstream f(log, std::ios::binary);
+  if (!f || !f.seekg(from)) return "";
+  constexpr std::string_view kError = "motionctl: error: ";
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind(kError, 0) == 0) return line.substr(kError.size());
+  return "";
+}
+
+std::streamoff file_size(const std::string& path) {
+  std::ifstream f(path, std::ios::binary | std::ios::ate);
+  return f ? std::streamoff(f.tellg()) : 0;
+}
+
 SimServer start_sim_server(const std::string& config) {
   const std::string log = sim_state_dir() + "/sim.log";
+  const std::streamoff log_start = file_size(log);
   const pid_t child = ::fork();
   if (child < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
   if (child == 0) {
@@ -111,10 +128,13 @@ SimServer start_sim_server(const std::string& config) {
     ::_exit(127);
   }
   ::waitpid(child, nullptr, 0);
-  // The server registers itself once its PTY is open.
+  // The server registers itself once its PTY is open; an error it prints
+  // in the log instead ends the wait at once.
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < until) {
     if (auto s = find_sim_server()) return *s;
+    const std::string err = error_in_log(log, log_start);
+    if (!err.empty()) throw std::runtime_error("the virtual board did not start: " + err + " (" + log + ")");
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   throw std::runtime_error("the virtual board did not start within 20 s (see " + log + ")");
@@ -161,6 +181,9 @@ void unregister_sim_server(const SimServer& s) {
 }
 
 SimServer ensure_sim_server(const std::string& config) {
+  // A bad machine file is the user's error, said here with its line, not a
+  // server that dies in the background.
+  mc::machine::machine_or_default(config);
   const std::string want = absolute(config);
   StateLock lock;
   if (auto s = find_sim_server()) {
@@ -192,6 +215,9 @@ Board open_board() {
   }
   b.link = std::make_unique<BoardLink>(*b.port);
   b.link->connect();
+  // The machine's following-error limit holds whenever a command of ours
+  // arms the drives: a runaway trips a fault instead of running on.
+  mc::machine::arm_following_limits(*b.link, machine());
   return b;
 }
 

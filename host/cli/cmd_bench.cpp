@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/cli/commands.hpp"
 #include "sim/cosim/bench.hpp"
@@ -93,10 +94,19 @@ void add_vboard_speeds(const mc::sim::BenchOptions& o, mc::sim::BenchResult& r) 
   r.wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// --jitter: the shipped histogram, or a file that must be text (a binary
+// file is refused with the offset of its first non-text byte).
+mc::sim::JitterHistogram jitter_or_default(const std::string& path) {
+  if (path.empty()) return mc::sim::default_jitter();
+  require_text_file(path, "--jitter");
+  return mc::sim::load_jitter(path);
+}
+
 void bench_command(const BenchCli& c) {
   mc::sim::BenchOptions o;
   o.machine = mc::machine::machine_or_default(c.config);
-  o.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
+  require_writable_dir(c.out, "--out");  // before the bench, not after it
+  o.jitter = jitter_or_default(c.jitter);
   o.out_dir = c.out;
   o.quick = c.quick;
   o.engine = parse_engine(c.engine);
@@ -145,7 +155,9 @@ struct CosimCli {
 void cosim_command(const CosimCli& c) {
   mc::sim::RunSpec s;
   s.machine = mc::machine::machine_or_default(c.config);
-  s.jitter = c.jitter.empty() ? mc::sim::default_jitter() : mc::sim::load_jitter(c.jitter);
+  if (!c.csv.empty()) require_writable_file(c.csv, "--csv");
+  if (!c.trace.empty()) require_writable_file(c.trace, "--trace");
+  s.jitter = jitter_or_default(c.jitter);
   s.platform = mc::sim::find_platform(s.machine, c.platform);
   s.scenario = mc::sim::find_scenario(c.scenario, c.quick);
   s.engine = parse_engine(c.engine);

@@ -1,6 +1,7 @@
 // motionctl enable | disable | clear-fault | jog | move: the board
 // commands that need only the link (--port DEV or --sim before the command).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -17,6 +18,7 @@
 #include "host/cli/commands.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/limits.hpp"
 #include "host/motion/board_run.hpp"
 
 namespace mc::host::cli {
@@ -41,6 +43,12 @@ std::vector<int> axes_of(const std::string& axis, int naxes) {
   return v;
 }
 
+// "--axis ''" (an empty variable in a script) must not mean "every axis".
+void refuse_empty_axis(const CLI::Option& opt, const std::string& axis) {
+  if (opt.count() > 0 && axis.empty())
+    throw InputError("--axis", "\"\"", "an axis name: x, y or z (leave --axis out for every axis)");
+}
+
 void enable(const std::string& axis, bool json) {
   if (!axis.empty()) parse_axis(axis);  // a bad name is an error before any port is opened
   Board b = open_board();
@@ -48,6 +56,7 @@ void enable(const std::string& axis, bool json) {
   const int naxes = read_naxes(l);
   const std::vector<int> axes = axes_of(axis, naxes);
   enable_axes(l, axes, note);
+  mc::machine::arm_following_limits(l, machine());
   const BoardState s = read_state(l);
   if (json) {
     nlohmann::ordered_json j;
@@ -101,18 +110,26 @@ void clear_fault(bool json) {
 }
 
 // ---- jog / move -------------------------------------------------------------------
+
 struct MotionOptions {
   std::string axis, distance, feed, target;
   bool json = false;
 };
 
+// `asked` names the option that sets the target, for a move beyond the travel.
 void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::array<double, 3>&)>& target,
-             const std::string& feed_text, bool json) {
+             const mc::machine::Asked& asked, const std::string& feed_text, bool json) {
   const double feed_mm_min = parse_number(feed_text, "--feed");
   if (!(feed_mm_min > 0)) throw InputError("--feed", quote(feed_text), "a feed above 0 mm/min");
   const auto scale = axis_scales();
+  // The machine's travel and speeds, checked before the drives are armed.
+  const mc::machine::MachineConfig m = machine();
+  const Vec3 from = start_position(l);
+  const Vec3 to = target(from, scale);
+  mc::machine::check_travel(m, from, to, asked);
+  mc::machine::check_feed(m, from, to, feed_mm_min, {"--feed", feed_text});
   const MoveResult r = move_axes(
-      l, [&](const Vec3& from) { return target(from, scale); }, feed_mm_min, scale, note);
+      l, [&](const Vec3& at) { return target(at, scale); }, feed_mm_min, scale, note);
   if (!r.moved) {
     std::cout << (json ? "{\n  \"moved\": false\n}\n" : "already there\n");
     return;
@@ -144,10 +161,10 @@ void jog(const MotionOptions& o) {
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {
         Vec3 to = from;
-        to[size_t(a)] += std::llround(mm * 1e-3 * s[size_t(a)]);
+        to[size_t(a)] += mc::machine::counts_of(mm, s[size_t(a)]);
         return to;
       },
-      o.feed, o.json);
+      {"--distance", o.distance}, o.feed, o.json);
 }
 
 void move(const MotionOptions& o) {
@@ -167,10 +184,10 @@ void move(const MotionOptions& o) {
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {
         Vec3 to = from;
-        for (size_t a = 0; a < mm.size(); ++a) to[a] = std::llround(mm[a] * 1e-3 * s[a]);
+        for (size_t a = 0; a < mm.size(); ++a) to[a] = mc::machine::counts_of(mm[a], s[a]);
         return to;
       },
-      o.feed, o.json);
+      {"target", o.target}, o.feed, o.json);
 }
 
 }  // namespace
@@ -182,18 +199,28 @@ void add_board_commands(CLI::App& app) {
       std::string(kBoardFooter) +
       "\nThe watchdog turns the drives off one WDOG period (100 ms by default) after the last frame, so\n"
       "they go off when this command exits: the intended safety behaviour. jog and move arm again.");
-  en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")->type_name("AXIS");
+  CLI::Option* eaxis =
+      en->add_option("--axis", *axis, "x, y or z (default: every axis of the machine config)")
+          ->type_name("AXIS");
   auto ejson = std::make_shared<bool>(false);
   en->add_flag("--json", *ejson, "One JSON object");
-  en->callback([axis, ejson] { enable(*axis, *ejson); });
+  en->callback([axis, eaxis, ejson] {
+    refuse_empty_axis(*eaxis, *axis);
+    enable(*axis, *ejson);
+  });
 
   auto daxis = std::make_shared<std::string>();
   CLI::App* dis = app.add_subcommand("disable", "Disable the PID of an axis; without --axis also disarm");
   dis->footer(kBoardFooter);
-  dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")->type_name("AXIS");
+  CLI::Option* daxis_opt =
+      dis->add_option("--axis", *daxis, "x, y or z (default: every axis, and the drives off)")
+          ->type_name("AXIS");
   auto djson = std::make_shared<bool>(false);
   dis->add_flag("--json", *djson, "One JSON object");
-  dis->callback([daxis, djson] { disable(*daxis, *djson); });
+  dis->callback([daxis, daxis_opt, djson] {
+    refuse_empty_axis(*daxis_opt, *daxis);
+    disable(*daxis, *djson);
+  });
 
   CLI::App* cf = app.add_subcommand("clear-fault", "Clear the latched faults whose cause is gone");
   cf->footer(kBoardFooter);
@@ -205,7 +232,9 @@ void add_board_commands(CLI::App& app) {
   CLI::App* jg = app.add_subcommand("jog", "Move one axis by a distance at a feed, and wait until done");
   jg->footer(std::string(kBoardFooter) +
              "\nArms the drives (clearing a watchdog fault left by the previous command), starts from where\n"
-             "the axes are, and keeps the link alive until the move is done.");
+             "the axes are, and keeps the link alive until the move is done. Refused before anything moves:\n"
+             "a target beyond an axis' travel_min_m..travel_max_m, a feed that drives an axis above its\n"
+             "max_speed_m_s (the machine TOML).");
   jg->add_option("--axis", jo->axis, "x, y or z")->required()->type_name("AXIS");
   jg->add_option("--distance", jo->distance, "mm, signed")->required()->type_name("MM");
   jg->add_option("--feed", jo->feed, "mm/min along the path")->required()->type_name("MM/MIN");

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -45,6 +46,7 @@ nlohmann::ordered_json gains_json(int axis, const AxisGains& g) {
   j["ff2"] = g.gains.ff2;
   j["out_limit"] = g.limits.out_limit;
   j["int_limit"] = g.limits.int_limit;
+  j["following_error_limit_counts"] = g.ferr;
   j["words"] = g.words;
   return j;
 }
@@ -99,9 +101,11 @@ void set(const GainsOptions& o) {
       throw InputError("--limit", quote(o.limit), "drive units 0..32767 (0: none)");
     cur.limits.out_limit = uint32_t(std::lround(lim));
   }
+  const GainNames names{"--ts", o.ts, "--kp", o.kp};
+  check_gains(l, g, names);  // before the warning: a refused Ts changes nothing
   if ((!o.ts.empty() || o.defaults) && ts_change_affects_other_axes(l, a, g.ts))
     warn("Ts is shared by every axis: the other axes' gains now run at the new period (set them again)");
-  const AxisGains now = apply_gains(l, a, g, cur.limits, warn);
+  const AxisGains now = apply_gains(l, a, g, cur.limits, warn, names);
   if (o.json)
     std::cout << gains_json(a, now).dump(2) << '\n';
   else {
@@ -112,6 +116,7 @@ void set(const GainsOptions& o) {
 
 // ---- config save / load ---------------------------------------------------------------
 void save(const std::string& file) {
+  require_writable_file(file, "FILE");
   Board b = open_board();
   const int n = mc::machine::save_gains(*b.link, file);
   std::cout << "saved " << n << " axes to " << file << '\n';
@@ -145,7 +150,9 @@ void add_gains_commands(CLI::App& app) {
       std::string(kFooter) +
       "\nOptions not given keep the board's current values (or, with --defaults, the machine config's).\n"
       "Gains in drive units (+-32767) per count: Kp per count, Ki per count*s, Kd per count/s.\n"
-      "Ts is one register for every axis.");
+      "Ts is one register for every axis: whole clock cycles from the core's sweep (70 cycles) to 10 ms.\n"
+      "Kp at most 32767. Everything is checked before the first write; a write the board refuses\n"
+      "half-way puts the previous Ts and words back.");
   st->add_option("--axis", o->axis, "x, y or z")->required()->type_name("AXIS");
   st->add_option("--kp", o->kp, "Proportional gain")->type_name("GAIN");
   st->add_option("--ki", o->ki, "Integral gain")->type_name("GAIN");

@@ -21,6 +21,7 @@
 #include "host/control/board_gains.hpp"
 #include "host/control/pid_double.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/limits.hpp"
 #include "host/machine/machine_config.hpp"
 
 namespace mc::host::cli {
@@ -61,9 +62,17 @@ void hostloop(const HostloopOptions& o) {
   const PidGains g = mc::machine::tuned_gains(mach.axes.at(size_t(a)), ts_host, delay);
   const double olim = cur.limits.out_limit ? double(cur.limits.out_limit) : 32767;
   mc::host::PidDouble pid(g, olim);
-  const int32_t counts = int32_t(std::llround(mm * 1e-3 * cpm));
-  if (counts == 0) throw InputError("--distance", quote(o.distance), "a move of at least one count");
+  const int64_t move = mc::machine::counts_of(mm, cpm);
+  if (move == 0) throw InputError("--distance", quote(o.distance), "a move of at least one count");
+  // The jog out and back: within travel and the axis' speed, before arming.
+  const Vec3 from = start_position(l);
+  Vec3 to = from;
+  to[size_t(a)] += move;
+  mc::machine::check_travel(mach, from, to, {"--distance", o.distance});
+  mc::machine::check_feed(mach, from, to, feed, {"--feed", o.feed});
+  const auto counts = int32_t(move);  // within travel, so within 32 bits
   enable_axes(l, {a}, note);
+  mc::machine::arm_following_limits(l, mach);
   catch_interrupts();
   const int64_t samples = std::llround(duration / ts);
   const double fc = feed / 60e3 * cpm;

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/commands.hpp"
@@ -21,6 +22,9 @@ namespace mc::host::cli {
 namespace {
 
 constexpr double kRowInterval = 1e-4;  // s: one CSV row per 100 us
+// The longest run: 10^8 steps at the default 1 us (tens of seconds of wall
+// time), and a CSV of 10^6 rows; beyond it is a typo, not an experiment.
+constexpr double kMaxDurationS = 100;
 constexpr double kPi = 3.14159265358979323846;
 
 struct PlantStepOptions {
@@ -77,7 +81,8 @@ void run(const PlantStepOptions& o) {
   const mc::machine::MachineConfig machine = mc::machine::machine_or_default(o.config);
   const mc::machine::AxisConfig& ax = mc::machine::axis(machine, o.axis);
   const double volts = parse_number(o.volts, "--volts");
-  const double duration = parse_duration(o.duration, "--duration");
+  const double duration = require_in(parse_duration(o.duration, "--duration"), {0, kMaxDurationS, "s"},
+                                     "--duration", o.duration, "of plant time");
   const double dt = o.dt.empty() ? machine.plant_dt_s : parse_duration(o.dt, "--dt");
   const double steps_per_row_f = kRowInterval / dt;
   const long steps_per_row = std::lround(steps_per_row_f);

@@ -22,6 +22,7 @@
 #include "host/link/board_state.hpp"
 #include "host/machine/gains_file.hpp"
 #include "host/machine/job.hpp"
+#include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -133,6 +134,7 @@ void run_job(const RunOptions& o) {
   if (mc::machine::gains_where_missing(l, m, note) > 0) st = read_state(l);
   // Plan from where the axes are (enabling starts the command there).
   const Vec3 at = enable_axes(l, axes, note);
+  mc::machine::arm_following_limits(l, m);  // a runaway trips FERR instead of running on
   const mc::host::PlannerConfig cfg = mc::machine::planner_config(m);
   const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg));
   // Ctrl-C from here on stops the job along the path; the line below says so.

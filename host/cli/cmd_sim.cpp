@@ -5,8 +5,11 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <thread>
@@ -19,6 +22,9 @@
 
 namespace mc::host::cli {
 namespace {
+
+// How long `sim stop` waits for the server to go after each signal.
+constexpr double kStopWaitS = 10;
 
 std::atomic<bool> g_stop{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
@@ -110,16 +116,48 @@ void serve(const ServeOptions& o) {
   std::cerr << "motionctl sim: " << mc::sim::describe_speed(end, paced) << std::endl;
 }
 
+// Gone: no such process, or a zombie its parent has not reaped yet.
+bool gone(long pid) {
+  if (::kill(pid_t(pid), 0) != 0 && errno == ESRCH) return true;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;
+  const size_t paren = line.rfind(')');
+  return paren != std::string::npos && paren + 2 < line.size() && line[paren + 2] == 'Z';
+}
+
+// Polls until the process is gone or `seconds` have passed; whether it went.
+bool wait_gone(long pid, double seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (!gone(pid)) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+// Says what happened, truthfully: stopped on SIGTERM, killed after it
+// ignored SIGTERM, or an error (exit 1) when even SIGKILL left it running.
 void stop() {
   const auto s = find_sim_server();
   if (!s) {
     std::cout << "no virtual board registered in " << sim_state_dir() << '\n';
     return;
   }
-  ::kill(pid_t(s->pid), SIGTERM);
-  for (int i = 0; i < 200 && ::kill(pid_t(s->pid), 0) == 0; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(25));
-  std::cout << "stopped the virtual board (pid " << s->pid << ", " << s->pty << ")\n";
+  const std::string which = "the virtual board (pid " + std::to_string(s->pid) + ", " + s->pty + ")";
+  if (::kill(pid_t(s->pid), SIGTERM) != 0 && errno != ESRCH)
+    throw std::runtime_error("cannot signal " + which + ": " + std::strerror(errno));
+  if (wait_gone(s->pid, kStopWaitS)) {
+    unregister_sim_server(*s);  // it does so itself; not when it died another way
+    std::cout << "stopped " << which << '\n';
+    return;
+  }
+  ::kill(pid_t(s->pid), SIGKILL);
+  if (!wait_gone(s->pid, kStopWaitS))
+    throw std::runtime_error("could not stop " + which + ": still running after SIGTERM and SIGKILL");
+  unregister_sim_server(*s);
+  std::cout << "killed " << which << " with SIGKILL: it did not stop within " << kStopWaitS
+            << " s of SIGTERM\n";
 }
 
 }  // namespace
@@ -157,6 +195,9 @@ void add_sim_command(CLI::App& app) {
                 "Do not register for --sim (by default the first live server is the one --sim uses)");
   srv->callback([o] { serve(*o); });
   CLI::App* st = sim->add_subcommand("stop", "Stop the virtual board that --sim uses");
+  st->footer(
+      "Sends SIGTERM and waits up to 10 s for the server to exit; if it has not, SIGKILL. Prints which,\n"
+      "and exits 1 when the process is still running after both.");
   st->callback([] { stop(); });
 }
 

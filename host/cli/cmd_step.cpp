@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -20,6 +21,7 @@
 #include "host/control/board_experiments.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -72,20 +74,31 @@ void step(const StepOptions& o) {
   const double duration = parse_duration(o.duration, "--duration");
   if (duration > 10) throw InputError("--duration", quote(o.duration), "at most 10 s");
   const double cpm = machine_scale(a0, o.axis);
-  const int32_t counts = int32_t(std::llround(mm * 1e-3 * cpm));
+  const int64_t counts = mc::machine::counts_of(mm, cpm);
   if (counts == 0) throw InputError("--size", quote(o.size), "a step of at least one encoder count");
+  // The outputs and the machine's limits, before the board is touched.
+  if (!o.csv.empty()) require_writable_file(o.csv, "--csv");
+  if (!o.plot.empty()) require_writable_file(o.plot, "--plot");
+  const mc::machine::MachineConfig m = machine();
+  const mc::machine::Asked asked{"--size", o.size};
+  const uint32_t ferr = mc::machine::step_ferr_counts(m, a0, counts, asked);
   Board b = open_board();
   BoardLink& l = *b.link;
   const int a = board_axis(l, o.axis);
+  const Vec3 from = start_position(l);
+  Vec3 to = from;
+  to[size_t(a)] += counts;
+  mc::machine::check_travel(m, from, to, asked);
   catch_interrupts();
-  const StepCapture c = capture_step(l, a, counts, duration, note);
+  // Within FERR's 16 bits (step_ferr_counts), so within 32.
+  const StepCapture c = capture_step(l, a, int32_t(counts), duration, note, ferr);
   if (!o.csv.empty()) write_step_csv(o.csv, c);
   if (!o.plot.empty()) write_step_plot(o.plot, c, cpm);
   if (o.json) {
     nlohmann::ordered_json j;
     j["axis"] = axis_name(a);
     j["step_counts"] = counts;
-    j["step_mm"] = counts / cpm * 1e3;
+    j["step_mm"] = double(counts) / cpm * 1e3;
     j["ts_s"] = c.ts;
     j["decimation"] = c.decim;
     j["decimation_frames_alone"] = c.decim_needed;
@@ -96,9 +109,9 @@ void step(const StepOptions& o) {
     j["metrics"] = metrics_json(c.m);
     std::cout << j.dump(2) << '\n';
   } else {
-    std::cout << "step of " << counts << " counts (" << counts / cpm * 1e3 << " mm) on axis " << axis_name(a)
-              << " at Ts " << format_duration(c.ts) << ", captured " << format_duration(duration)
-              << " of board time\n";
+    std::cout << "step of " << counts << " counts (" << double(counts) / cpm * 1e3 << " mm) on axis "
+              << axis_name(a) << " at Ts " << format_duration(c.ts) << ", captured "
+              << format_duration(duration) << " of board time\n";
     std::cout << "telemetry every " << c.decim << (c.decim == 1 ? " sample" : " samples") << " ("
               << format_duration(c.decim * c.ts) << "): a frame takes "
               << format_duration(10.0 * telemetry_frame_bytes(1) / double(l.read(br::BAUD)))
@@ -125,7 +138,9 @@ void add_step_commands(CLI::App& app) {
       std::string(kBoardFooter) +
       "\nArms the drives, enables the axis' PID, streams telemetry (POS, CMD, ERR, OUT) at the finest\n"
       "decimation the link carries at the board's Ts, steps the command by --size from where it is,\n"
-      "and captures --duration of board time. Gaps in the telemetry are reported, never filled in.");
+      "and captures --duration of board time. Gaps in the telemetry are reported, never filled in.\n"
+      "The step must end within the axis' travel; during it the following-error limit (FERR) is the\n"
+      "step plus max_following_error_m, which must fit FERR's 16 bits, and is put back afterwards.");
   st->add_option("--axis", o->axis, "x, y or z")->required()->type_name("AXIS");
   st->add_option("--size", o->size, "Step size, mm, signed (default 1)")->type_name("MM");
   st->add_option("--duration", o->duration, "Capture after the step, board time (default 0.2s)")

@@ -42,7 +42,6 @@ void tune(const TuneOptions& o) {
   double wc = 0;
   if (!o.bandwidth.empty()) {
     wc = parse_number(o.bandwidth, "--bandwidth");
-    if (!(wc > 0)) throw InputError("--bandwidth", quote(o.bandwidth), "rad/s above 0");
     if (o.method == "relay")
       throw InputError("--bandwidth", quote(o.bandwidth), "no --bandwidth with --method relay");
   }
@@ -52,6 +51,7 @@ void tune(const TuneOptions& o) {
   const int a = board_axis(l, o.axis);
   const AxisGains cur = read_gains(l, a);
   const double ts = cur.gains.ts;
+  if (!o.bandwidth.empty()) check_bandwidth(wc, ts, "--bandwidth", o.bandwidth);  // before the experiment
   const double baud = double(l.read(br::BAUD));
   catch_interrupts();
   const Experiment e = tune_experiment(l, a, o.method, ts, baud, note);

@@ -27,7 +27,28 @@ void set_command(BoardLink& l, int a, int32_t target) {
   set_position(l, at);
 }
 
-StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration, const Note& note) {
+namespace {
+
+// work(), then restore(), whether work succeeded or threw; when both throw,
+// work's error says more.
+template <class Work, class Restore>
+auto then_restore(const Work& work, const Restore& restore) {
+  auto r = [&] {
+    try {
+      return work();
+    } catch (...) {
+      try {
+        restore();
+      } catch (...) {
+      }
+      throw;
+    }
+  }();
+  restore();
+  return r;
+}
+
+StepCapture capture_step_as_is(BoardLink& l, int a, int32_t counts, double duration, const Note& note) {
   StepCapture c;
   c.counts = counts;
   c.ts = double(read_ts_cycles(l)) / double(l.read(br::CLK_HZ));
@@ -65,6 +86,17 @@ StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration, c
   for (const TlmSample& x : c.s) y.push_back(x.pos);
   c.m = step_metrics(c.t, y, c.y0, counts, 0);
   return c;
+}
+}  // namespace
+
+StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration, const Note& note,
+                         uint32_t ferr_counts) {
+  if (ferr_counts == 0) return capture_step_as_is(l, a, counts, duration, note);
+  const uint16_t ferr = br::axis(a, br::AX_FERR);
+  const uint32_t ferr_before = l.read(ferr) & 0xFFFF;
+  l.write_verify(ferr, ferr_counts, 0xFFFF);
+  return then_restore([&] { return capture_step_as_is(l, a, counts, duration, note); },
+                      [&] { l.write_verify(ferr, ferr_before, 0xFFFF); });
 }
 
 Snapshot snapshot(BoardLink& l, int a) {
@@ -183,19 +215,12 @@ Experiment tune_experiment(BoardLink& l, int a, const std::string& method, doubl
   if (method != "model" && method != "relay")
     throw InputError("tune method", quote(method), "model or relay");
   const Snapshot snap = snapshot(l, a);
-  Experiment e;
-  try {
-    e = method == "model" ? model_experiment(l, a, ts_board, baud, note)
-                          : relay_experiment(l, a, ts_board, baud, note);
-  } catch (...) {
-    try {
-      restore(l, a, snap);
-    } catch (...) {  // the first error says more
-    }
-    throw;
-  }
-  restore(l, a, snap);
-  return e;
+  return then_restore(
+      [&] {
+        return method == "model" ? model_experiment(l, a, ts_board, baud, note)
+                                 : relay_experiment(l, a, ts_board, baud, note);
+      },
+      [&] { restore(l, a, snap); });
 }
 
 // One jog of `counts` on axis a, captured every decim samples for

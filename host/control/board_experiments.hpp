@@ -39,8 +39,11 @@ struct StepCapture {
 };
 // Arms axis a, streams telemetry at the finest decimation the link carries,
 // steps the command by `counts` from where it is and captures `duration_s`
-// of board time after the step.
-StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration_s, const Note& note);
+// of board time after the step. ferr_counts > 0: the axis' following-error
+// limit during the capture (the step is itself a following error of
+// |counts| the moment it is commanded); the previous limit is put back.
+StepCapture capture_step(BoardLink& l, int a, int32_t counts, double duration_s, const Note& note,
+                         uint32_t ferr_counts = 0);
 
 // ---- tune ---------------------------------------------------------------------------
 // What an experiment changes and restore() puts back: the sample period,

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/errors.hpp"
 #include "host/link/board_state.hpp"
 
 namespace mc::host {
@@ -63,15 +64,46 @@ std::vector<std::string> design_warnings(const PidDesign& d) {
   return w;
 }
 
-AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimits& lim, const Note& warn) {
+uint32_t check_gains(BoardLink& l, const PidGains& g, const GainNames& names) {
+  const double clk = double(l.read(br::CLK_HZ));
+  const uint32_t latency = l.read(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_LATENCY));
+  const uint32_t cycles = core_ts_cycles(g.ts, clk, latency, names.ts, names.ts_text);
+  check_core_kp(g.kp, names.kp, names.kp_text);
+  design(g);  // every coefficient within its word
+  return cycles;
+}
+
+AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimits& lim, const Note& warn,
+                      const GainNames& names) {
+  // Everything is checked before the first write: a refused input leaves
+  // the board as it was.
+  const uint32_t cycles = check_gains(l, g, names);
   const PidDesign d = design(g);
   if (warn)
     for (const std::string& w : design_warnings(d))
       warn("axis " + std::string(1, "xyz"[axis % 3]) + ": " + w);
-  const uint32_t cycles = uint32_t(std::llround(g.ts * double(l.read(br::CLK_HZ))));
   const uint16_t ts_addr = pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS);
-  if (l.read(ts_addr) != cycles) l.write_verify(ts_addr, cycles);
-  write_gains(l, axis, d, lim);
+  const uint32_t old_ts = l.read(ts_addr);
+  std::array<uint32_t, pid_reg::NREGS_RAM> old{};
+  for (int r = 0; r < pid_reg::NREGS_RAM; ++r)
+    old[size_t(r)] = l.read(pid_reg::addr(uint8_t(axis), uint8_t(r)));
+  try {
+    if (old_ts != cycles) l.write_verify(ts_addr, cycles);
+    write_gains(l, axis, d, lim);
+  } catch (const std::exception& e) {
+    // A write the board refused half-way: put back what was there.
+    std::string left;
+    try {
+      l.write_verify(ts_addr, old_ts);
+      for (int r = 0; r < pid_reg::NREGS_RAM; ++r)
+        l.write_verify(pid_reg::addr(uint8_t(axis), uint8_t(r)), old[size_t(r)]);
+      left = "restored the previous Ts and gains";
+    } catch (const std::exception& r) {
+      left = "could not restore the previous Ts (" + std::to_string(old_ts) +
+             " cycles) and gains: " + r.what() + "; check with 'motionctl gains show'";
+    }
+    throw BoardError(std::string(e.what()) + "; " + left);
+  }
   return read_gains(l, axis);
 }
 

@@ -30,10 +30,22 @@ void write_gains(BoardLink& l, int axis, const PidDesign& d, const CoreLimits& l
 // Warnings about a design whose quantized controller departs from it (empty: none).
 std::vector<std::string> design_warnings(const PidDesign& d);
 
-// Writes the sample period (shared by all axes) when it changes, designs and
-// writes the axis' gains and limits, verifies them word by word, and sends
-// each design warning to `warn`. Returns what the board holds afterwards.
-AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimits& lim, const Note& warn);
+// How errors name the gains: option names and the user's text for a CLI,
+// keys for a file.
+struct GainNames {
+  std::string ts = "ts", ts_text, kp = "kp", kp_text;
+};
+// What the board can run, checked without writing: Ts a whole number of its
+// clock cycles from its sweep latency (G_LATENCY) to kMaxTs, Kp up to
+// kMaxKp, every coefficient within its word. Returns the Ts register value.
+uint32_t check_gains(BoardLink& l, const PidGains& g, const GainNames& names = {});
+// check_gains, then writes the sample period (shared by all axes) when it
+// changes, designs and writes the axis' gains and limits, verifies them word
+// by word, and sends each design warning to `warn`. Returns what the board
+// holds afterwards. A write that fails half-way puts back the previous Ts
+// and words, and the BoardError says whether that worked.
+AxisGains apply_gains(BoardLink& l, int axis, const PidGains& g, const CoreLimits& lim, const Note& warn,
+                      const GainNames& names = {});
 // Whether writing Ts = ts for `axis` changes the period under another axis
 // that has gains (Ts is shared: their gains then run at the new period).
 bool ts_change_affects_other_axes(BoardLink& l, int axis, double ts);

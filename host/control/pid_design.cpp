@@ -4,7 +4,9 @@
 #include <string>
 
 #include "hls/pid_regs.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
+#include "host/base/units.hpp"
 
 namespace mc::host {
 namespace {
@@ -177,6 +179,30 @@ mc::PidParams core_params(const PidDesign& d, const CoreLimits& lim) {
   p.word[mc::pid_reg::DBAND] = lim.deadband;
   p.word[mc::pid_reg::ELIM] = lim.err_limit;
   return p;
+}
+
+uint32_t core_ts_cycles(double ts, double clk_hz, uint32_t latency_cycles, std::string_view quantity,
+                        std::string_view as_written) {
+  const double min_s = latency_cycles / clk_hz;
+  const std::string range = "a sample period from " + format_duration(min_s) + " (" +
+                            std::to_string(latency_cycles) +
+                            " clock cycles, the core's sweep of every axis) to " + format_duration(kMaxTs);
+  const std::string value = as_written.empty() ? format_number(ts) + " s" : quote(as_written);
+  if (!std::isfinite(ts) || ts > kMaxTs * (1 + 1e-9))
+    throw InputError(std::string(quantity), value, range, "too long");
+  const double cycles = ts * clk_hz;
+  if (cycles < latency_cycles * (1 - 1e-9))
+    throw InputError(std::string(quantity), value, range, "too short");
+  if (std::fabs(cycles - std::round(cycles)) > 1e-6 * cycles)
+    throw InputError(std::string(quantity), value,
+                     "a whole number of core clock cycles (1/clock_hz = " + format_duration(1 / clk_hz) + ")",
+                     format_number(cycles) + " cycles");
+  return uint32_t(std::llround(cycles));
+}
+
+void check_core_kp(double kp, std::string_view quantity, std::string_view as_written) {
+  require_in(kp, Bounds{0, kMaxKp, "drive units per count"}, quantity, as_written,
+             "beyond 32767 one count of error already saturates the output");
 }
 
 }  // namespace mc::host

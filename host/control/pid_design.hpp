@@ -106,6 +106,22 @@ struct PidDesign {
 // Validates, designs and quantizes. Throws InputError.
 PidDesign design(const PidGains& g);
 
+// --- What the core runs ---------------------------------------------------------
+// The longest sample period the core is built for (DESIGN.md: from 10 ms down
+// to the shortest its datapath allows, the sweep latency G_LATENCY).
+constexpr double kMaxTs = 10e-3;
+// The largest Kp: at Kp = 32767 one count of error already gives full-scale
+// output, so a larger Kp only turns the loop into a relay on the encoder's
+// last count. The coefficient word would hold up to 2^23 - 1.
+constexpr double kMaxKp = 32767;
+// The Ts register value for ts: InputError naming `quantity` (quoting
+// `as_written` when given) unless ts is a whole number of clock cycles at
+// clk_hz from latency_cycles up to kMaxTs.
+uint32_t core_ts_cycles(double ts, double clk_hz, uint32_t latency_cycles, std::string_view quantity,
+                        std::string_view as_written = {});
+// InputError naming `quantity` unless 0 <= kp <= kMaxKp.
+void check_core_kp(double kp, std::string_view quantity, std::string_view as_written = {});
+
 // The limit registers of one axis, as written to the core (output units for
 // the limits, counts for deadband and clamp; 0 = no limit, see
 // hls/pid_regs.hpp).

@@ -6,7 +6,9 @@
 #include <string>
 
 #include "hls/pid_core.hpp"
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
+#include "host/base/units.hpp"
 
 namespace mc::host {
 namespace {
@@ -500,6 +502,18 @@ PidGains design_model(const AxisModel& m, double wc, double zeta, double n) {
                          format_number(m.ts) + " s)",
                      "too fast for the sample period");
   return g;
+}
+
+double max_bandwidth(double ts) {
+  return kPi / ts;
+}
+
+double check_bandwidth(double wc, double ts, std::string_view quantity, std::string_view as_written) {
+  if (!(wc > 0))
+    throw InputError(std::string(quantity), as_written.empty() ? format_number(wc) : quote(as_written),
+                     "rad/s above 0");
+  return require_in(wc, Bounds{0, max_bandwidth(ts), "rad/s"}, quantity, as_written,
+                    "the Nyquist frequency pi/Ts at the board's Ts " + format_duration(ts));
 }
 
 double default_bandwidth(const AxisModel& m) {

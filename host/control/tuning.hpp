@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "host/control/pid_design.hpp"
@@ -130,6 +131,12 @@ AxisModel identify(const std::vector<double>& u, const std::vector<double>& y, d
 PidGains design_model(const AxisModel& m, double wc, double zeta = 2.0, double n = 2.0);
 // The bandwidth `tune --method model` uses without options (reasons in tuning.cpp).
 double default_bandwidth(const AxisModel& m);
+// The fastest closed loop a PID sampled every ts can be asked for: the
+// Nyquist frequency pi/ts, rad/s. Beyond it no design exists, whatever the
+// model; tune refuses such a --bandwidth before its experiment.
+double max_bandwidth(double ts);
+// wc unless it is outside 0 < wc <= max_bandwidth(ts): InputError naming `quantity`.
+double check_bandwidth(double wc, double ts, std::string_view quantity, std::string_view as_written = {});
 
 // The step response of the loop with the core's quantized controller
 // (pid_design + the hls twin), output limit out_limit, integer encoder

@@ -103,6 +103,15 @@ std::array<int64_t, 3> arm(BoardLink& l, const Note& note) {
   return at;
 }
 
+std::array<int64_t, 3> start_position(BoardLink& l) {
+  const int naxes = read_naxes(l);
+  const bool armed = l.read(br::STATUS) & (1u << bb::ST_ARMED);
+  std::array<int64_t, 3> at{};
+  for (int a = 0; a < naxes && a < 3; ++a)
+    at[size_t(a)] = int32_t(l.read(br::axis(a, armed ? br::AX_CMD : br::AX_POS)));
+  return at;
+}
+
 namespace {
 std::string letter(int a) {
   return a >= 0 && a < 3 ? std::string(1, "xyz"[a]) : std::to_string(a);

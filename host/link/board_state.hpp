@@ -56,6 +56,10 @@ void set_position(BoardLink& l, const std::vector<std::pair<int, int32_t>>& axes
 // interpolator is aborted and set to the encoder positions first, so the
 // command starts where the axes are. Returns the interpolator position.
 std::array<int64_t, 3> arm(BoardLink& l, const Note& note);
+// Where arm() would start a command, without changing anything: the
+// interpolator's command when armed, else the encoder positions. Commands
+// check a move against the machine's limits from here before they arm.
+std::array<int64_t, 3> start_position(BoardLink& l);
 
 // InputError unless axis a has gains (Kp or Ki nonzero), naming the commands
 // that set them.

@@ -5,11 +5,15 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
+#include "hls/board_regs.hpp"
+#include "hls/pid_core.hpp"
 #include "host/base/errors.hpp"
 #include "host/control/pid_design.hpp"
+#include "host/motion/interp_plan.hpp"
 
 namespace mc::machine {
 namespace {
@@ -19,6 +23,20 @@ using mc::host::InputError;
 using mc::host::quote;
 
 constexpr double kPi = 3.14159265358979323846;
+
+// The board as built (rtl/motioncore_icebreaker.v): three axes share the
+// PID's sweep, and the host link runs at 1 Mbit/s.
+constexpr int kBoardAxes = 3;
+constexpr double kLinkBaud = 1e6;
+// The clock range a board can run: the link's UART needs at least two
+// clocks per bit, and the watchdog's reset period CLK_HZ/10 must fit its
+// WDOG_W-bit register.
+constexpr double kMinClockHz = 2 * kLinkBaud;
+constexpr double kMaxClockHz = 10.0 * double((1u << mc::board::WDOG_W) - 1);
+// The FERR register holds the following-error limit in 16 bits of counts.
+constexpr double kMaxFerrCounts = 65535;
+// Positions are 32-bit counts on the board.
+constexpr double kMaxPosCounts = 2147483647.0;
 
 enum class Range { positive, non_negative, any };
 
@@ -52,7 +70,9 @@ class Reader {
     line_ = l > 0 ? int64_t(l) : line;
   }
 
-  double number(std::string_view key, Range r, std::string_view unit) {
+  // hi: the largest value that is physically sane, and why (for the message).
+  double number(std::string_view key, Range r, std::string_view unit,
+                double hi = std::numeric_limits<double>::infinity(), std::string_view why = {}) {
     const toml::node& n = need(key);
     double v;
     if (const auto* i = n.as_integer()) {
@@ -64,6 +84,11 @@ class Reader {
     }
     const bool ok = std::isfinite(v) && (r == Range::any || (r == Range::positive ? v > 0 : v >= 0));
     if (!ok) throw bad(key, n, describe(r, unit));
+    if (v > hi) {
+      std::string expected = describe(r, unit) + " up to " + format_number(hi);
+      if (!why.empty()) expected += " (" + std::string(why) + ")";
+      throw bad(key, n, expected, "above the range");
+    }
     return v;
   }
 
@@ -176,14 +201,17 @@ class Reader {
 
 MotorParams read_motor(Reader r) {
   MotorParams m{};
-  m.r_ohm = r.number("resistance_ohm", Range::positive, "ohm");
-  m.l_h = r.number("inductance_h", Range::positive, "H");
-  m.kt_nm_per_a = r.number("torque_constant_nm_per_a", Range::positive, "N*m/A");
-  m.ke_v_s_per_rad = r.number("back_emf_v_s_per_rad", Range::positive, "V*s/rad");
-  m.j_kg_m2 = r.number("inertia_kg_m2", Range::positive, "kg*m^2");
-  m.b_nm_s_per_rad = r.number("viscous_nm_s_per_rad", Range::non_negative, "N*m*s/rad");
-  m.coulomb_nm = r.number("coulomb_nm", Range::non_negative, "N*m");
-  m.stiction_nm = r.number("stiction_nm", Range::non_negative, "N*m");
+  // The upper bounds are a decade or more beyond any motor a small machine
+  // carries: they catch a value typed in the wrong unit, not a big motor.
+  constexpr const char* kMotor = "beyond any motor of a small machine";
+  m.r_ohm = r.number("resistance_ohm", Range::positive, "ohm", 1e3, kMotor);
+  m.l_h = r.number("inductance_h", Range::positive, "H", 1, kMotor);
+  m.kt_nm_per_a = r.number("torque_constant_nm_per_a", Range::positive, "N*m/A", 100, kMotor);
+  m.ke_v_s_per_rad = r.number("back_emf_v_s_per_rad", Range::positive, "V*s/rad", 100, kMotor);
+  m.j_kg_m2 = r.number("inertia_kg_m2", Range::positive, "kg*m^2", 1, kMotor);
+  m.b_nm_s_per_rad = r.number("viscous_nm_s_per_rad", Range::non_negative, "N*m*s/rad", 100, kMotor);
+  m.coulomb_nm = r.number("coulomb_nm", Range::non_negative, "N*m", 1e3, kMotor);
+  m.stiction_nm = r.number("stiction_nm", Range::non_negative, "N*m", 1e3, kMotor);
   if (m.stiction_nm < m.coulomb_nm) {
     throw r.error("stiction_nm", format_number(m.stiction_nm),
                   "stiction_nm >= coulomb_nm = " + format_number(m.coulomb_nm) +
@@ -196,13 +224,13 @@ MotorParams read_motor(Reader r) {
 DriveConfig read_drive(Reader r, double clock_hz) {
   DriveConfig d{};
   d.kind = r.string("kind", {"pwm", "dac"}) == "pwm" ? DriveConfig::Kind::Pwm : DriveConfig::Kind::Dac;
-  d.supply_v = r.number("supply_v", Range::positive, "V");
+  d.supply_v = r.number("supply_v", Range::positive, "V", 1e3, "a drive of a small machine");
   d.pwm_bits = r.integer("pwm_bits", 1, 15, "bits of the PWM counter");
   d.pwm_hz = clock_hz / std::ldexp(1.0, d.pwm_bits);
   d.pwm_switching = r.boolean("pwm_switching");
   d.dac_bits = r.integer("dac_bits", 1, 16, "bits");
-  d.dac_range_v = r.number("dac_range_v", Range::positive, "V");
-  d.amp_gain = r.number("amp_gain", Range::positive, "V/V");
+  d.dac_range_v = r.number("dac_range_v", Range::positive, "V", 100, "a DAC's output");
+  d.amp_gain = r.number("amp_gain", Range::positive, "V/V", 1e3, "a linear amplifier");
   r.finish();
   return d;
 }
@@ -214,15 +242,17 @@ PidConfig read_pid(Reader r, double clock_hz) {
   p.kd = r.number("kd", Range::non_negative, "drive units per count/s");
   p.tf_s = r.number("tf_s", Range::non_negative, "s");
   p.ts_s = r.number("ts_s", Range::positive, "s");
+  try {
+    mc::host::core_ts_cycles(p.ts_s, clock_hz, uint32_t(mc::pid_latency(kBoardAxes)), "ts_s");
+    mc::host::check_core_kp(p.kp, "kp");
+  } catch (const InputError& e) {
+    const std::string key = e.quantity();
+    throw r.error(key, format_number(key == "kp" ? p.kp : p.ts_s), e.expected(), e.problem());
+  }
   p.ff1 = r.number("ff1", Range::any, "drive units per count/s");
   p.ff2 = r.number("ff2", Range::any, "drive units per count/s^2");
   p.out_limit = r.number("out_limit", Range::positive, "drive units");
   if (p.out_limit > 32767) throw r.error("out_limit", format_number(p.out_limit), "0 < out_limit <= 32767");
-  const double cycles = p.ts_s * clock_hz;
-  if (std::fabs(cycles - std::round(cycles)) > 1e-6 * cycles) {
-    throw r.error("ts_s", format_number(p.ts_s),
-                  "a whole number of core clock cycles (1/clock_hz = " + format_number(1 / clock_hz) + " s)");
-  }
   // The core must be able to hold the coefficients these gains give.
   try {
     mc::host::design({p.kp, p.ki, p.kd, p.tf_s, p.ts_s, p.ff1, p.ff2});
@@ -236,16 +266,36 @@ PidConfig read_pid(Reader r, double clock_hz) {
 AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   AxisConfig a{};
   a.name = name;
-  a.lead_m_per_rev = r.number("lead_m_per_rev", Range::positive, "m");
-  a.gear_ratio = r.number("gear_ratio", Range::positive, "motor revs per screw rev");
-  a.load_kg = r.number("load_kg", Range::non_negative, "kg");
-  a.load_force_n = r.number("load_force_n", Range::any, "N");
+  constexpr const char* kSmall = "a small machine";
+  a.lead_m_per_rev = r.number("lead_m_per_rev", Range::positive, "m", 1, kSmall);
+  a.gear_ratio = r.number("gear_ratio", Range::positive, "motor revs per screw rev", 1e3, kSmall);
+  a.load_kg = r.number("load_kg", Range::non_negative, "kg", 1e4, kSmall);
+  a.load_force_n = r.number("load_force_n", Range::any, "N", 1e5, kSmall);
+  if (a.load_force_n < -1e5) throw r.error("load_force_n", format_number(a.load_force_n), "-1e5..1e5 N");
   a.encoder_cpr = r.integer("encoder_counts_per_rev", 4, 1 << 24, "counts per motor rev after 4x decoding");
-  a.max_following_error_m = r.number("max_following_error_m", Range::positive, "m");
-  a.max_speed_m_s = r.number("max_speed_m_s", Range::positive, "m/s");
+  const double cpm = counts_per_m(a);
+  a.max_following_error_m =
+      r.number("max_following_error_m", Range::positive, "m", kMaxFerrCounts / cpm,
+               "65535 counts, what the board's FERR register holds, at " + format_number(cpm) + " counts/m");
+  if (a.max_following_error_m * cpm < 1)
+    throw r.error("max_following_error_m", format_number(a.max_following_error_m),
+                  "at least one encoder count (" + format_number(1 / cpm) + " m)");
+  const double top = mc::host::max_iteration_rate(clock_hz) / cpm;
+  a.max_speed_m_s =
+      r.number("max_speed_m_s", Range::positive, "m/s", top,
+               "the interpolator's top rate " + format_number(mc::host::max_iteration_rate(clock_hz)) +
+                   " counts/s at clock_hz");
   a.max_accel_m_s2 = r.number_or("max_accel_m_s2", 1.0, Range::positive, "m/s^2");
-  a.travel_min_m = r.number_or("travel_min_m", -1.0, Range::any, "m");
-  a.travel_max_m = r.number_or("travel_max_m", 1.0, Range::any, "m");
+  // Travel: machine coordinates from where the axes were when the board
+  // started (there is no homing yet), within what the board's 32-bit
+  // counters hold; default +-1 m (less where the counters reach less).
+  const double reach = kMaxPosCounts / cpm;
+  a.travel_min_m = r.number_or("travel_min_m", -std::min(1.0, reach), Range::any, "m");
+  a.travel_max_m = r.number_or("travel_max_m", std::min(1.0, reach), Range::any, "m");
+  if (a.travel_min_m < -reach || a.travel_max_m > reach)
+    throw r.error(a.travel_min_m < -reach ? "travel_min_m" : "travel_max_m",
+                  format_number(a.travel_min_m < -reach ? a.travel_min_m : a.travel_max_m),
+                  "a travel within the board's 32-bit positions: +-" + format_number(reach) + " m");
   if (!(a.travel_min_m < a.travel_max_m))
     throw r.error("travel_max_m", format_number(a.travel_max_m),
                   "travel_max_m > travel_min_m = " + format_number(a.travel_min_m));
@@ -292,16 +342,28 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
   m.source = source_name;
   {
     Reader r = top.table("machine");
-    m.clock_hz = r.number("clock_hz", Range::positive, "Hz");
+    m.clock_hz = r.number("clock_hz", Range::positive, "Hz", kMaxClockHz,
+                          "the watchdog's reset period clock_hz/10 must fit its 24-bit register");
+    if (m.clock_hz < kMinClockHz)
+      throw r.error(
+          "clock_hz", format_number(m.clock_hz),
+          "at least " + format_number(kMinClockHz) + " Hz (two clocks per bit of the 1 Mbit/s link)",
+          "below the range");
     m.plant_dt_s = r.number("plant_dt_s", Range::positive, "s");
+    const double k = m.plant_dt_s * m.clock_hz;
+    if (k < 2 || std::fabs(k - std::round(k)) > 1e-6 * k)
+      throw r.error(
+          "plant_dt_s", format_number(m.plant_dt_s),
+          "a whole number of at least 2 clock cycles (1/clock_hz = " + format_number(1 / m.clock_hz) + " s)",
+          format_number(k) + " cycles");
     r.finish();
   }
   {
     Reader r = top.table("host_loop");
-    m.host_period_s = r.number("period_s", Range::positive, "s");
-    m.host_io_latency_s = r.number("io_latency_s", Range::non_negative, "s");
+    m.host_period_s = r.number("period_s", Range::positive, "s", 1, "a host loop");
+    m.host_io_latency_s = r.number("io_latency_s", Range::non_negative, "s", 1, "a host's I/O");
     m.host_dac_bits = r.integer("dac_bits", 1, 16, "bits");
-    m.host_dac_range_v = r.number("dac_range_v", Range::positive, "V");
+    m.host_dac_range_v = r.number("dac_range_v", Range::positive, "V", 100, "a DAC's output");
     r.finish();
   }
   if (top.has("planner")) m.planner = read_planner(top.table("planner"));
@@ -315,6 +377,15 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
   for (const std::string& n : names) {
     if (n == "z" && !axes.has(n)) continue;
     m.axes.push_back(read_axis(axes.table(n), n, m.clock_hz));
+  }
+  // The plant must move at least as often as the loops sample it.
+  for (const AxisConfig& a : m.axes) {
+    if (m.plant_dt_s > a.pid.ts_s * (1 + 1e-9)) {
+      Reader r = top.table("machine");
+      throw r.error("plant_dt_s", format_number(m.plant_dt_s),
+                    "at most the axes' sample period (axis." + a.name +
+                        ".pid.ts_s = " + format_number(a.pid.ts_s) + " s)");
+    }
   }
   axes.finish();
   top.finish();

@@ -57,11 +57,14 @@ struct AxisConfig {
   int encoder_cpr;        // counts per motor revolution after 4x decoding
   DriveConfig drive;
   PidConfig pid;
-  double max_following_error_m;
-  double max_speed_m_s;
+  double max_following_error_m;  // armed on the board's FERR whenever motionctl arms the drives
+  double max_speed_m_s;          // jog, move and the planner refuse feeds above it
   // Optional keys (older files load with these defaults).
   double max_accel_m_s2 = 1.0;  // path planner: the axis's acceleration limit
-  double travel_min_m = -1.0;   // machine coordinates the axis may reach
+  // Soft travel limits: machine coordinates the axis may reach (m from where
+  // it was when the board started; no homing yet). jog, move and step refuse
+  // targets beyond them before anything moves.
+  double travel_min_m = -1.0;
   double travel_max_m = 1.0;
 };
 
