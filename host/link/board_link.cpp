@@ -150,6 +150,10 @@ size_t BoardLink::poll(std::chrono::milliseconds wait) {
 
 proto::Reply BoardLink::transact(proto::Frame req) {
   req.seq = seq_.next();
+  return exchange(req);
+}
+
+proto::Reply BoardLink::exchange(const proto::Frame& req) {
   const proto::Bytes bytes = proto::encode(req);
   const uint64_t good_before = dec_.stats().frames, bytes_before = bytes_in_;
   for (int attempt = 0; attempt < o_.max_tries; ++attempt) {
@@ -216,8 +220,19 @@ void BoardLink::write_verify(uint16_t addr, uint32_t value, uint32_t mask) {
 }
 
 bool BoardLink::segments(const std::vector<seg::Words>& segs) {
-  const proto::Frame req = proto::segments(0, segs);
-  const proto::Reply r = transact(req);
+  proto::Frame req = proto::segments(0, segs);
+  req.seq = seq_.next();
+  uint64_t tries = c_.retransmits;
+  proto::Reply r = exchange(req);
+  // FULL is a refusal, so the board would still apply a later copy of the
+  // same frame. After a retransmission the FULL may answer an earlier copy
+  // while a later one found room and was queued: taking it at its word
+  // sends those segments twice. Ask again with the same SEQ until an answer
+  // comes without a retransmission: DUP then means queued, FULL means not.
+  while (r.status == bp::ST_FULL && c_.retransmits != tries) {
+    tries = c_.retransmits;
+    r = exchange(req);
+  }
   if (r.status == bp::ST_FULL) return false;
   check(r, req);
   return true;

@@ -82,6 +82,8 @@ class BoardLink {
 
  private:
   std::chrono::milliseconds timeout() const;
+  // Sends `req` as it is (its SEQ too) until a reply answers it.
+  proto::Reply exchange(const proto::Frame& req);
   void note_rtt(double ms);
   // Reads until a reply answering `req` arrives or the deadline passes.
   bool await(const proto::Frame& req, std::chrono::steady_clock::time_point deadline, proto::Reply& out);
