@@ -48,7 +48,7 @@ target_compile_definitions(test_regs_agree PRIVATE MC_RTL_DIR="${MC_RTL_DIR}")
 
 # RTL lint and synthesizability (Yosys reads and maps every module).
 add_test(NAME rtl_lint COMMAND ${CMAKE_SOURCE_DIR}/scripts/lint_rtl.sh)
-set_tests_properties(rtl_lint PROPERTIES LABELS rtl)
+set_tests_properties(rtl_lint PROPERTIES LABELS rtl TIMEOUT ${MC_TEST_TIMEOUT})
 add_test(NAME synth_pid_core_ice40
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh pid_core ${CMAKE_BINARY_DIR}/synth_check)
 set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
