@@ -72,6 +72,10 @@ target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_cosim)
 # (The Verilated top, vboard, is the virtual board's too: sim/CMakeLists.txt.)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
 target_link_libraries(test_board_rtl PRIVATE mc_hls mc_motion vboard)
+# Hostile bytes on the board's RX pin: no bad frame changes a register
+# (fuzz/board_rx.hpp; fuzz_board_rx runs the same check under libFuzzer).
+mc_gtest(test_board_rx rtl test_board_rx.cpp)
+target_link_libraries(test_board_rx PRIVATE mc_link vboard)
 
 # The generated register map is up to date; the protocol codec.
 mc_gtest(test_board_regs unit test_board_regs.cpp)
