@@ -41,14 +41,15 @@ class PrivateRuntimeDir {
 
 // `motionctl sim serve --fast` in its own process; the PTY path from its
 // first line. With watch_status, its status lines (stderr) are kept for
-// wait_dormant(); they come every 0.2 s of wall time.
+// wait_dormant(); they come every second of wall time (the dormant one at
+// once), so the pipe holds minutes of them while nobody reads.
 class Server {
  public:
   explicit Server(bool watch_status = false) {
     int out[2], err[2] = {-1, -1};
     if (::pipe(out) != 0 || (watch_status && ::pipe(err) != 0)) throw std::runtime_error("pipe");
     std::vector<std::string> args = {"sim", "serve", "--fast", "--no-register"};
-    if (watch_status) args.insert(args.end(), {"--status-every", "0.2s"});
+    if (watch_status) args.insert(args.end(), {"--status-every", "1s"});
     pid_ = spawn(args, out[1], err[1]);
     if (pid_ <= 0) throw std::runtime_error("no server");
     ::close(out[1]);
