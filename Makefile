@@ -2,10 +2,13 @@
 # everyday commands. See README.md.
 BUILD      ?= build
 BUILD_SAN  ?= build-san
+BUILD_FUZZ ?= build-fuzz
+# Seconds per fuzz target (make fuzz); docs/reliability.md has the figures.
+FUZZ_SECONDS ?= 60
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint format clean regs synth prog formal readme-bench
+.PHONY: all deps configure test test-sanitize bench lint fuzz format clean regs synth prog formal readme-bench
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -41,11 +44,16 @@ lint: deps
 formal: deps
 	FORMAL_DIR=$(BUILD)/formal scripts/formal.sh -j $(JOBS)
 
+# libFuzzer targets (fuzz/), built with clang++ in $(BUILD_FUZZ): each runs
+# FUZZ_SECONDS on its seed corpus; prints executions and crashes per target.
+fuzz: deps
+	fuzz/run.sh $(BUILD_FUZZ) $(FUZZ_SECONDS)
+
 format:
 	clang-format -i $$(git ls-files '*.cpp' '*.hpp')
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN)
+	rm -rf $(BUILD) $(BUILD_SAN) $(BUILD_FUZZ)
 
 # Copy the benchmark table of the last full `make bench` into README.md.
 readme-bench:

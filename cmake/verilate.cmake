@@ -35,7 +35,7 @@ function(mc_verilate lib)
   # (gtkwave/fstapi.c) stores at unaligned addresses and shifts negative
   # values on purpose, and UBSan would stop every traced run there. These
   # libraries keep AddressSanitizer; our own code keeps UBSan as well.
-  if(MC_SANITIZE)
+  if(MC_SANITIZE OR MC_FUZZ)
     target_compile_options(${lib} PRIVATE -fno-sanitize=undefined)
   endif()
   get_target_property(vdirs ${lib} INTERFACE_INCLUDE_DIRECTORIES)

@@ -12,6 +12,7 @@ PKGS=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   gnuplot-nox
   clang-format clang-tidy ccache
+  clang libclang-rt-dev  # make fuzz: clang++ and the libFuzzer runtime
   linuxcnc-uspace
   bcnc
 )

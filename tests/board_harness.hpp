@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "Vmotioncore_icebreaker.h"
+#include "fuzz/board_rx.hpp"  // the pins at rest and a clock with the UART: shared with the fuzzer
 #include "hls/board_regs.hpp"
 #include "host/link/protocol.hpp"
 #include "sim/vboard/uart_model.hpp"
@@ -37,16 +38,7 @@ class BoardTb {
  public:
   explicit BoardTb(uint32_t seed = 1)
       : ctx_(random_context(seed)), top_(std::make_unique<Vmotioncore_icebreaker>(ctx_.get())) {
-    top_->CLK = 0;
-    top_->RX = 1;
-    top_->BTN_N = 1;
-    top_->ESTOP = 0;
-    top_->X_LIM = top_->Y_LIM = top_->Z_LIM = 0;
-    top_->X_ENC_A = top_->X_ENC_B = top_->X_ENC_Z = 0;
-    top_->Y_ENC_A = top_->Y_ENC_B = top_->Y_ENC_Z = 0;
-    top_->Z_ENC_A = top_->Z_ENC_B = top_->Z_ENC_Z = 0;
-    top_->HW_A = top_->HW_B = 0;
-    top_->eval();
+    fuzz::inputs_at_rest(*top_);
     run(64);  // power-on reset and the PID's state clear
   }
   ~BoardTb() { top_->final(); }
@@ -56,13 +48,7 @@ class BoardTb {
 
   // One clock: host line, board edge, board line.
   void clock() {
-    top_->RX = tx_.pin();
-    top_->CLK = 1;
-    top_->eval();
-    top_->CLK = 0;
-    top_->eval();
-    rx_.clock(top_->TX);
-    tx_.clock();
+    fuzz::uart_clock(*top_, tx_, rx_);
     while (rx_.has_byte()) {
       hp::Frame f;
       if (dec_.push(rx_.take(), f)) (hp::is_telemetry(f) ? tlm_ : replies_).push_back(std::move(f));

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <memory>
@@ -71,6 +72,26 @@ inline Result run(const std::vector<std::string>& args) {
   r.out = slurp(out.get());
   r.err = slurp(err.get());
   return r;
+}
+
+// Reads fd into `seen` until it holds `marker` (true) or the writer is gone
+// (false): the tests wait on what a program says, not on the clock.
+inline bool read_until(int fd, const std::string& marker, std::string& seen) {
+  char buf[512];
+  while (seen.find(marker) == std::string::npos) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) return false;  // EOF, or EIO from a terminal whose other side closed
+    seen.append(buf, size_t(n));
+  }
+  return true;
+}
+
+// Everything left on fd, until the writer is gone.
+inline std::string read_all(int fd) {
+  std::string s;
+  char buf[512];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) s.append(buf, size_t(n));
+  return s;
 }
 
 inline int count_lines(const std::string& s) {

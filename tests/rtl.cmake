@@ -48,7 +48,7 @@ target_compile_definitions(test_regs_agree PRIVATE MC_RTL_DIR="${MC_RTL_DIR}")
 
 # RTL lint and synthesizability (Yosys reads and maps every module).
 add_test(NAME rtl_lint COMMAND ${CMAKE_SOURCE_DIR}/scripts/lint_rtl.sh)
-set_tests_properties(rtl_lint PROPERTIES LABELS rtl)
+set_tests_properties(rtl_lint PROPERTIES LABELS rtl TIMEOUT ${MC_TEST_TIMEOUT})
 add_test(NAME synth_pid_core_ice40
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth_check.sh pid_core ${CMAKE_BINARY_DIR}/synth_check)
 set_tests_properties(synth_pid_core_ice40 PROPERTIES LABELS synth TIMEOUT 600)
@@ -72,6 +72,10 @@ target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_cosim)
 # (The Verilated top, vboard, is the virtual board's too: sim/CMakeLists.txt.)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
 target_link_libraries(test_board_rtl PRIVATE mc_hls mc_motion vboard)
+# Hostile bytes on the board's RX pin: no bad frame changes a register
+# (fuzz/board_rx.hpp; fuzz_board_rx runs the same check under libFuzzer).
+mc_gtest(test_board_rx rtl test_board_rx.cpp)
+target_link_libraries(test_board_rx PRIVATE mc_link vboard)
 
 # The generated register map is up to date; the protocol codec.
 mc_gtest(test_board_regs unit test_board_regs.cpp)

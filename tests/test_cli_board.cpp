@@ -16,7 +16,6 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "cli_run.hpp"
@@ -69,7 +68,7 @@ TEST(CliBoard, GainsRoundTripThroughTheVirtualBoard) {
 
 TEST(CliBoard, KillingTheCliMidMoveTripsTheWatchdog) {
   PrivateRuntimeDir rt;
-  Server sv;
+  Server sv(true);
   ASSERT_EQ(sv.pty().rfind("/dev/", 0), 0u) << sv.pty();
   const std::vector<std::string> port = {"--port", sv.pty()};
   auto with = [&](std::vector<std::string> a) {
@@ -78,20 +77,24 @@ TEST(CliBoard, KillingTheCliMidMoveTripsTheWatchdog) {
   };
   expect_ok(with({"gains", "set", "--axis", "x", "--defaults"}));
   expect_ok(with({"enable", "--axis", "x"}));
-  // 20 mm at 1200 mm/min: a second of board time, many seconds of wall time.
-  const pid_t jog = spawn(with({"jog", "--axis", "x", "--distance", "20", "--feed", "1200"}), -1);
+  // 20 mm at 1200 mm/min: a second of board time. Killed as soon as it says
+  // the move is under way (its first segments are on the board).
+  int err[2];
+  ASSERT_EQ(::pipe(err), 0);
+  const pid_t jog = spawn(with({"jog", "--axis", "x", "--distance", "20", "--feed", "1200"}), -1, err[1]);
+  ::close(err[1]);
   ASSERT_GT(jog, 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  std::string said;
+  const bool moving = read_until(err[0], "note: moving", said);
   ::kill(jog, SIGKILL);
   ::waitpid(jog, nullptr, 0);
-  // The board must live 100 ms of its own time without a frame; status
-  // itself feeds the watchdog, so wait quietly, longer each time.
-  json s;
-  for (int wait_ms : {1500, 4000, 8000}) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
-    s = run_json(with({"status", "--json"}));
-    if (!s["faults"].empty()) break;
-  }
+  ::close(err[0]);
+  ASSERT_TRUE(moving) << "jog ended without starting the move:\n" << said;
+  // Nothing feeds the watchdog now. The server says when its board is
+  // dormant: the link quiet for longer than any watchdog period, the drives
+  // off, the axes at rest. The bound is board time: the move itself is 1 s.
+  ASSERT_TRUE(sv.wait_dormant(10.0)) << "the board did not come to rest within 10 s of board time";
+  const json s = run_json(with({"status", "--json"}));
   EXPECT_EQ(s["faults"], json::array({"watchdog"}));
   EXPECT_FALSE(s["armed"]);
   EXPECT_FALSE(s["axes"][0]["drive"]) << "the drive must be off";

@@ -4,16 +4,15 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
+#include <stdlib.h>
 #include <sys/wait.h>
+#include <termios.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 
 #include "cli_run.hpp"
 #include "sim/plant/jitter.hpp"
@@ -82,31 +81,42 @@ TEST(CliJitter, UnwritableOutNamesThePathAndLeavesNothing) {
 
 TEST(CliJitter, InterruptKeepsTheSamplesSoFar) {
   const fs::path out = scratch("int.csv");
-  std::FILE* err = std::tmpfile();
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_adddup2(&fa, fileno(err), 2);
-  std::vector<std::string> args{MOTIONCTL_PATH, "jitter", "--period", "5ms",
-                                "--duration",   "30s",    "--out",    out.string()};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&fa);
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  // stderr on a terminal, as a user at the keyboard has it: the recorder
+  // shows its progress there once a second, and Ctrl-C comes after the
+  // first report (its handler is in place and 200 samples are in).
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  ASSERT_GE(master, 0);
+  ASSERT_EQ(::grantpt(master), 0);
+  ASSERT_EQ(::unlockpt(master), 0);
+  const int slave = ::open(::ptsname(master), O_RDWR | O_NOCTTY);
+  ASSERT_GE(slave, 0);
+  termios tio{};
+  ::tcgetattr(slave, &tio);
+  ::cfmakeraw(&tio);  // the bytes as written: no CR added before LF
+  ::tcsetattr(slave, TCSANOW, &tio);
+  const int devnull = ::open("/dev/null", O_WRONLY);
+  const pid_t pid = mc::test::spawn({"jitter", "--period", "5ms", "--duration", "30s", "--out", out.string()},
+                                    devnull, slave);
+  ::close(devnull);
+  ::close(slave);
+  std::string said;
+  const bool reported = mc::test::read_until(master, " samples", said);
   kill(pid, SIGINT);
+  said += mc::test::read_all(master);
+  ::close(master);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  const std::string e = mc::test::slurp(err);
-  std::fclose(err);
+  ASSERT_TRUE(reported) << said;
   ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping cleanly";
   EXPECT_EQ(WEXITSTATUS(status), 1);
+  // The progress line is erased; then one error line.
+  const size_t erased = said.rfind("\r\033[K");
+  ASSERT_NE(erased, std::string::npos) << said;
+  const std::string e = said.substr(erased + 4);
   EXPECT_EQ(mc::test::count_lines(e), 1) << e;
-  EXPECT_NE(e.find("interrupted after"), std::string::npos) << e;
+  EXPECT_EQ(e.rfind("motionctl: error: interrupted after", 0), 0u) << e;
   const mc::sim::JitterHistogram h = mc::sim::load_jitter(out.string());
-  EXPECT_GT(h.total(), 10u);
+  EXPECT_GE(h.total(), 200u) << "the first report came after 1 s of 5 ms periods";
   EXPECT_LT(h.total(), 6000u);
   EXPECT_EQ(h.get("interrupted").rfind("yes", 0), 0u);
   fs::remove_all(out.parent_path());

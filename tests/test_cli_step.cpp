@@ -5,14 +5,12 @@
 // were, hostloop runs and reports, and bad arguments give one error line.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "cli_run.hpp"
@@ -143,14 +141,23 @@ TEST(CliStep, InterruptedTuneRestoresTheGains) {
   board_json(sv, {"gains", "set", "--axis", "x", "--defaults"});
   const json before = board_json(sv, {"gains", "show", "--axis", "x"});
   const int devnull = ::open("/dev/null", O_WRONLY);
-  const pid_t tune = spawn({"--port", sv.pty(), "tune", "--axis", "x"}, devnull);
+  int err[2];
+  ASSERT_EQ(::pipe(err), 0);
+  const pid_t tune = spawn({"--port", sv.pty(), "tune", "--axis", "x"}, devnull, err[1]);
   ::close(devnull);
+  ::close(err[1]);
   ASSERT_GT(tune, 0);
-  // The experiment (1 s of board time) takes several seconds of wall time.
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  // Interrupted once it says its handler is in place and the experiment
+  // runs (1 s of board time): the next telemetry wait sees the flag.
+  std::string said;
+  const bool running = read_until(err[0], "Ctrl-C stops it", said);
   ::kill(tune, SIGINT);
+  said += read_all(err[0]);
+  ::close(err[0]);
   int st = 0;
   ::waitpid(tune, &st, 0);
+  ASSERT_TRUE(running) << said;
+  EXPECT_NE(said.find("interrupted"), std::string::npos) << said;
   ASSERT_TRUE(WIFEXITED(st)) << "SIGINT is caught, not fatal";
   EXPECT_NE(WEXITSTATUS(st), 0);
   const json after = board_json(sv, {"gains", "show", "--axis", "x"});

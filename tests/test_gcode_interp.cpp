@@ -309,6 +309,31 @@ TEST(GcodeModal, AFailedLineChangesNothing) {
   EXPECT_EQ(in.modal().spindle, SpindleState::off);
 }
 
+// Found by fuzz/fuzz_gcode.cpp: a whole-number word beyond what an int holds
+// was converted anyway (undefined behaviour). Each is refused, with its word,
+// and changes nothing; in range, the same words work.
+TEST(GcodeModal, HugeWholeNumberWordsAreRefused) {
+  Interpreter in;
+  ASSERT_TRUE(in.execute_line("G0 X1 F100", 1).ok());
+  const std::string before = modal_report(in.modal());
+  const char* const bad[] = {"M22222222222222222222222", "G2222222222222222222222.5", "T99999999999999",
+                             "T-1", "T1.5", "G17 G2 X1 I1 P99999999999", "G81 X0 Z-1 R1 L99999999999",
+                             // Pecks: millions of calls, or a loop where depth -= Q no longer moves.
+                             "G83 X0 Z-1 R1 Q0.00000001", "G73 X0 Z0 R100000000000000000000 Q1"};
+  for (const char* line : bad) {
+    const LineResult r = in.execute_line(line, 2);
+    ASSERT_FALSE(r.ok()) << line;
+    EXPECT_TRUE(r.calls.empty()) << line;
+    const char letter = line[std::string(line).find_last_of("MGTPLQ")];
+    EXPECT_EQ(r.error->word.substr(0, 1), std::string(1, letter)) << line << ": " << r.error->format();
+    EXPECT_EQ(modal_report(in.modal()), before) << line;
+  }
+  EXPECT_TRUE(in.execute_line("T7 M6", 3).ok());
+  EXPECT_EQ(in.modal().tool, 7);
+  EXPECT_TRUE(in.execute_line("G17 G2 X1 I0.5 P3", 4).ok());
+  EXPECT_TRUE(in.execute_line("G81 X0 Z-1 R1 L3", 5).ok());
+}
+
 TEST(GcodeModal, M2ResetsTheModesButKeepsOffsets) {
   Interpreter in;
   ASSERT_TRUE(in.execute_line("G55 G18 G91 G93 M3 S100 M8 G92 X5", 1).ok());

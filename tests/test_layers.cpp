@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <map>
 #include <regex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -23,6 +25,7 @@ const std::map<std::string, int>& layers() {
       {"hls", 0},         {"host/base", 1},    {"host/gcode", 1},   {"host/link", 2},
       {"host/motion", 3}, {"host/control", 4}, {"host/machine", 5}, {"host/grbl", 6},
       {"sim/plant", 6},   {"sim/cosim", 7},    {"sim/vboard", 7},   {"host/cli", 8},
+      {"fuzz", 8},
   };
   return m;
 }
@@ -50,22 +53,31 @@ std::vector<std::string> violations(const fs::path& root) {
         const std::string what = m[1];
         const std::string where =
             folder + "/" + e.path().filename().string() + ":" + std::to_string(n) + ": ";
+        // "folder/file:line: \"what\"" and the parts that say what is wrong.
+        const auto add = [&](std::initializer_list<std::string_view> parts) {
+          std::string s = where;
+          s += '"';
+          s += what;
+          s += '"';
+          for (std::string_view p : parts) s += p;
+          out.push_back(std::move(s));
+        };
         const size_t slash = what.rfind('/');
         if (slash == std::string::npos) {
           // The twins are header-only HLS code: they include each other by name.
           if (folder == "hls" && fs::exists(dir / what)) continue;
-          if (!generated(what)) out.push_back(where + "\"" + what + "\" is not included by its folder path");
+          if (!generated(what)) add({" is not included by its folder path"});
           continue;
         }
         const std::string to = what.substr(0, slash);
         const auto it = layers().find(to);
         if (it == layers().end()) {
-          out.push_back(where + "\"" + what + "\" is in " + to + ", which is not a layer folder");
+          add({" is in ", to, ", which is not a layer folder"});
         } else if (to != folder && it->second >= rank) {
-          out.push_back(where + "\"" + what + "\": " + folder + " (layer " + std::to_string(rank) +
-                        ") includes from " + to + " (layer " + std::to_string(it->second) + ")");
+          add({": ", folder, " (layer ", std::to_string(rank), ") includes from ", to, " (layer ",
+               std::to_string(it->second), ")"});
         } else if (!fs::exists(root / what)) {
-          out.push_back(where + "\"" + what + "\" does not exist");
+          add({" does not exist"});
         }
       }
     }

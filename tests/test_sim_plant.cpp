@@ -286,16 +286,44 @@ TEST(SimPlant, FrictionOffIsTheLinearModel) {
 }
 
 // The per-step cost, printed for docs/plant.md; not asserted (speed is never
-// asserted in unit tests).
-TEST(SimPlant, StepCost) {
+// asserted in unit tests). What is asserted is the long run's physics: under
+// a symmetric +-12 V square wave the axis settles into a periodic motion
+// (the same state one period later) that is odd-symmetric (half a period
+// later every state variable has the opposite sign), because the model and
+// its friction are odd in the speed. 2 million steps: 50 periods of 40 ms.
+TEST(SimPlant, StepCostAndSquareWaveSteadyState) {
   AxisPlant p(default_x(), 1e-6);
-  const int n = 2000000;
+  const int n = 2000000, half = 20000;
+  struct State {
+    double i, w, theta;
+  };
+  const auto state = [&p] { return State{p.current_a(), p.speed_rad_s(), p.position_rad()}; };
+  State period_start{}, mid{};
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < n; ++k) p.step((k / 20000) % 2 ? 12.0 : -12.0);
+  for (int k = 0; k < n; ++k) {
+    if (k == n - 2 * half) period_start = state();
+    if (k == n - half) mid = state();
+    p.step((k / half) % 2 ? 12.0 : -12.0);
+  }
   const auto t1 = std::chrono::steady_clock::now();
   const double ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / n;
   std::printf("AxisPlant::step with friction: %.1f ns per step (%d steps)\n", ns, n);
-  EXPECT_TRUE(std::isfinite(p.position_rad()));
+  const State end = state();
+  std::printf("last period: i %.6g -> %.6g -> %.6g A, w %.6g -> %.6g -> %.6g rad/s, stroke %.6g rad\n",
+              period_start.i, mid.i, end.i, period_start.w, mid.w, end.w, mid.theta - period_start.theta);
+  // The half period is 2.8 mechanical time constants: the motion reverses
+  // at nearly full speed; each half period ends a net stroke away.
+  ASSERT_GT(std::fabs(end.w), 100.0);
+  const double stroke = mid.theta - period_start.theta;
+  ASSERT_LT(stroke, -1.0);  // the first half of each period is at -12 V
+  // Periodic: one period later, the same current and speed, no net travel.
+  EXPECT_NEAR(end.i, period_start.i, 1e-9 * std::fabs(end.i));
+  EXPECT_NEAR(end.w, period_start.w, 1e-9 * std::fabs(end.w));
+  EXPECT_NEAR(end.theta - period_start.theta, 0.0, 1e-9 * std::fabs(stroke));
+  // Odd: half a period later, the opposite current and speed, the stroke back.
+  EXPECT_NEAR(mid.i, -end.i, 1e-9 * std::fabs(end.i));
+  EXPECT_NEAR(mid.w, -end.w, 1e-9 * std::fabs(end.w));
+  EXPECT_NEAR(end.theta - mid.theta, -stroke, 1e-9 * std::fabs(stroke));
 }
 
 // --- Encoder pins --------------------------------------------------------------
@@ -512,17 +540,40 @@ TEST(SimClosedLoop, DefaultGainsFollowTheDesignRule) {
   const cplx disc = std::sqrt(cplx(wc * wc - 4 * wc * wi));
   const cplx p1 = (-wc + disc) / 2.0, p2 = (-wc - disc) / 2.0;
   const cplx r1 = wc * (p1 + wi) / (p1 * (p1 - p2)), r2 = wc * (p2 + wi) / (p2 * (p2 - p1));
-  double peak = 0, settle = 0;
-  for (int n = 0; n <= 200000; ++n) {
-    const double t = n * 1e-6;
-    const double y = 1 + (r1 * std::exp(p1 * t) + r2 * std::exp(p2 * t)).real();
+  const auto ideal = [&](double t) { return 1 + (r1 * std::exp(p1 * t) + r2 * std::exp(p2 * t)).real(); };
+
+  // The loop as configured: the default gains (Tustin, at Ts, with the D
+  // filter Tf) on the linear plant (its electrical pole and all), driven
+  // through the linearized drive (supply_v / 32767 V per drive unit) and
+  // measured without quantization. A unit step keeps the drive far from
+  // saturation, so the loop is linear and comparable with T(s).
+  AxisPlant lin(cfg, 1e-6);
+  lin.set_friction(false);
+  RefPid pid(cfg.pid);
+  const double counts_per_rad = cfg.encoder_cpr / (2 * kPi);
+  const int per_sample = int(std::lround(cfg.pid.ts_s / lin.dt_s()));
+  double peak = 0, settle = 0, worst = 0, peak_ideal = 0, settle_ideal = 0;
+  for (int n = 0; n * cfg.pid.ts_s < 0.2; ++n) {
+    const double u = pid.step(1.0 - lin.position_rad() * counts_per_rad);
+    ASSERT_LT(std::fabs(u), 0.5 * cfg.pid.out_limit) << "saturated: not the linear loop";
+    for (int s = 0; s < per_sample; ++s) lin.step(u * cfg.drive.supply_v / 32767);
+    const double t = lin.time_s(), y = lin.position_rad() * counts_per_rad, yi = ideal(t);
     peak = std::max(peak, y);
+    peak_ideal = std::max(peak_ideal, yi);
     if (std::fabs(y - 1) > 0.02) settle = t;
+    if (std::fabs(yi - 1) > 0.02) settle_ideal = t;
+    // After the rise: the first milliseconds differ by the lags T(s) leaves out.
+    if (t > 0.01) worst = std::max(worst, std::fabs(y - yi));
   }
-  std::printf("ideal loop of the rule: overshoot %.1f %%, 2 %% settling %.1f ms\n", 100 * (peak - 1),
-              1e3 * settle);
-  EXPECT_NEAR(peak - 1, 0.163, 0.001);
-  EXPECT_NEAR(settle, 0.0285, 0.0005);
+  std::printf(
+      "ideal loop of the rule: overshoot %.1f %%, 2 %% settling %.1f ms; default gains on the linear plant: "
+      "%.1f %%, %.1f ms; largest difference after 10 ms %.4f of the step\n",
+      100 * (peak_ideal - 1), 1e3 * settle_ideal, 100 * (peak - 1), 1e3 * settle, worst);
+  // docs/plant.md quotes the ideal figures; the configured loop must be that loop,
+  // up to what sampling at Ts, the D filter and the electrical pole add.
+  EXPECT_NEAR(peak - 1, peak_ideal - 1, 0.02);
+  EXPECT_NEAR(settle, settle_ideal, 0.1 * settle_ideal);
+  EXPECT_LT(worst, 0.03);
 }
 
 TEST(SimClosedLoop, DefaultGainsSettleA1mmStep) {

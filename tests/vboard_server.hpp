@@ -39,12 +39,15 @@ class PrivateRuntimeDir {
   std::string dir_;
 };
 
-// `motionctl sim serve --fast` in its own process; the PTY path from its first line.
+// `motionctl sim serve --fast` in its own process; the PTY path from its
+// first line. With watch_status, its status lines (stderr) are kept for
+// wait_dormant(); they come every second of wall time (the dormant one at
+// once), so the pipe holds minutes of them while nobody reads.
 class Server {
  public:
-  Server() {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+  explicit Server(bool watch_status = false) {
+    int out[2], err[2] = {-1, -1};
+    if (::pipe(out) != 0 || (watch_status && ::pipe(err) != 0)) throw std::runtime_error("pipe");
     // MC_VBOARD_ENGINE=rtl (tests/vboard.cmake sets it for a second run of
     // the system tests): the same tests on the Verilated board.
     // Free-running, but waiting for the CLI's next request after each answer:
@@ -52,19 +55,45 @@ class Server {
     // of milliseconds of board time.
     std::vector<std::string> args = {"sim", "serve", "--fast", "--host-wait", "20ms", "--no-register"};
     if (const char* e = std::getenv("MC_VBOARD_ENGINE")) args.insert(args.end(), {"--engine", e});
-    pid_ = spawn(args, fds[1]);
+    if (watch_status) args.insert(args.end(), {"--status-every", "1s"});
+    pid_ = spawn(args, out[1], err[1]);
     if (pid_ <= 0) throw std::runtime_error("no server");
-    ::close(fds[1]);
+    ::close(out[1]);
+    if (watch_status) {
+      ::close(err[1]);
+      status_fd_ = err[0];
+    }
     char c;
-    while (::read(fds[0], &c, 1) == 1 && c != '\n') pty_ += c;
-    ::close(fds[0]);
+    while (::read(out[0], &c, 1) == 1 && c != '\n') pty_ += c;
+    ::close(out[0]);
   }
   ~Server() {
+    if (status_fd_ >= 0) ::close(status_fd_);
     if (pid_ <= 0) return;  // kill(-1) would signal every process we own
     ::kill(pid_, SIGTERM);
     ::waitpid(pid_, nullptr, 0);
   }
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
   const std::string& pty() const { return pty_; }
+  // Waits until the server reports the board dormant: the link quiet for
+  // longer than any watchdog period, every drive off, every axis at rest.
+  // False when its board clock passes max_board_s first, or it exits.
+  bool wait_dormant(double max_board_s) {
+    if (status_fd_ < 0) throw std::logic_error("Server: constructed without watch_status");
+    for (;;) {
+      const size_t nl = status_.find('\n');
+      if (nl == std::string::npos) {
+        if (!read_until(status_fd_, "\n", status_)) return false;
+        continue;
+      }
+      const std::string line = status_.substr(0, nl);
+      status_.erase(0, nl + 1);
+      if (line.find("clock stopped") != std::string::npos) return true;
+      const size_t at = line.find(": board ");
+      if (at != std::string::npos && std::stod(line.substr(at + 8)) > max_board_s) return false;
+    }
+  }
   // Stops it; true when it exited cleanly.
   bool stop() {
     if (pid_ <= 0) return false;
@@ -77,7 +106,8 @@ class Server {
 
  private:
   pid_t pid_ = -1;
-  std::string pty_;
+  int status_fd_ = -1;
+  std::string pty_, status_;
 };
 
 }  // namespace mc::test

@@ -54,6 +54,8 @@ void tune(const TuneOptions& o) {
   if (!o.bandwidth.empty()) check_bandwidth(wc, ts, "--bandwidth", o.bandwidth);  // before the experiment
   const double baud = double(l.read(br::BAUD));
   catch_interrupts();
+  note("tuning axis " + std::string(axis_name(a)) + " (" + o.method +
+       "): the experiment runs now; Ctrl-C stops it and restores the gains");
   const Experiment e = tune_experiment(l, a, o.method, ts, baud, note);
 
   const int32_t step = int32_t(std::llround(1e-3 * cpm));

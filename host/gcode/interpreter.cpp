@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -11,6 +12,11 @@ namespace mc::gcode {
 namespace {
 
 constexpr double kMmPerInch = 25.4;
+// Whole-number words (T, arc P turns) up to this: an int holds it, so the
+// conversion is defined (found by fuzz/fuzz_gcode.cpp).
+constexpr int kMaxCount = 1000000;
+// Canned-cycle L repeats: each is a few canonical calls.
+constexpr int kMaxRepeats = 10000;
 
 // G codes are handled as value x 10 so that G38.2 is 382 and G59.3 is 593.
 constexpr int g(int whole, int tenth = 0) {
@@ -285,9 +291,11 @@ class BlockExecutor {
   // ---- classification ----------------------------------------------------
   void classify() {
     for (const Word& w : b_.g) {
+      // The range first: std::lround of a value beyond long is unspecified.
+      if (w.value < 0 || w.value > 1000) fail(&w, grbl::unsupported_command, "unsupported G code");
       const double tenths = w.value * 10.0;
       const long code = std::lround(tenths);
-      if (w.value < 0 || std::fabs(tenths - static_cast<double>(code)) > 1e-6 || code > 10000)
+      if (std::fabs(tenths - static_cast<double>(code)) > 1e-6)
         fail(&w, grbl::unsupported_command, "unsupported G code");
       const int c = static_cast<int>(code);
       const int group = g_group(c);
@@ -302,6 +310,8 @@ class BlockExecutor {
     for (const Word& w : b_.m) {
       if (w.value < 0 || w.value != std::floor(w.value))
         fail(&w, grbl::command_value_not_integer, "an M code is a whole number");
+      // Beyond every M code, and beyond what an int holds (the conversion would be undefined).
+      if (w.value > 1000) fail(&w, grbl::unsupported_command, "unsupported M code");
       const int c = static_cast<int>(w.value);
       const int group = m_group(c);
       if (group < 0) fail(&w, grbl::unsupported_command, refused_m(c));
@@ -478,7 +488,11 @@ class BlockExecutor {
       emit(SetSpindleSpeed{m_.spindle_rpm});
     }
     if (has('T')) {  // 5 T
-      m_.selected_tool = static_cast<int>(value('T'));
+      const double t = value('T');
+      if (t < 0) fail('T', grbl::negative_value, "T (the tool number) must be 0 or more");
+      if (t != std::floor(t) || t > kMaxCount)
+        fail('T', grbl::command_value_not_integer, "T takes a whole number 0.." + std::to_string(kMaxCount));
+      m_.selected_tool = static_cast<int>(t);
       emit(SelectTool{m_.selected_tool});
     }
     if (mc(kToolChange) == 6) {  // 6 M6
@@ -706,8 +720,9 @@ class BlockExecutor {
     const char i2 = offset_letter(ax.second);
     int turns = 1;
     if (has('P')) {
-      if (value('P') != std::floor(value('P')) || value('P') < 1)
-        fail('P', grbl::command_value_not_integer, "arc P (turns) takes a whole number >= 1");
+      if (value('P') != std::floor(value('P')) || value('P') < 1 || value('P') > kMaxCount)
+        fail('P', grbl::command_value_not_integer,
+             "arc P (turns) takes a whole number 1.." + std::to_string(kMaxCount));
       turns = static_cast<int>(value('P'));
     }
     const bool cw = motion_ == g(2);
@@ -808,6 +823,9 @@ class BlockExecutor {
     int repeats = 1;
     if (has('L')) {
       if (value('L') < 1) fail('L', grbl::value_word_missing, "L (repeats) must be at least 1");
+      // Each repeat is a few calls: a bound keeps a typo from filling memory.
+      if (value('L') > kMaxRepeats)
+        fail('L', grbl::invalid_target, "L (repeats) must be at most " + std::to_string(kMaxRepeats));
       repeats = static_cast<int>(value('L'));
     }
     double q = st_.cycle_q_;
@@ -857,6 +875,18 @@ class BlockExecutor {
       fail(has('R') ? word('R') : mw, grbl::none,
            std::string("the R plane must not be below the bottom ") + cc_letter + " of the " + name +
                " cycle");
+    if (motion_ == g(73) || motion_ == g(83)) {
+      // Each peck is two or three calls. A Q far below the depth would make
+      // millions, and once the depth dwarfs Q, depth -= q stops changing it.
+      const double pecks = (r - cc) / q * repeats;
+      if (!(pecks <= kMaxRepeats)) {
+        char n[32];
+        std::snprintf(n, sizeof n, "%.3g", pecks);
+        fail(has('Q') ? word('Q') : mw, grbl::invalid_target,
+             std::string("the peck depth Q gives ") + n + " pecks for this depth; at most " +
+                 std::to_string(kMaxRepeats));
+      }
+    }
     // Every move's point: plane coordinates and the drilling axis.
     auto point = [&](double a, double b, double c) {
       Vec3 pt{};

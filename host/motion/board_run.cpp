@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <thread>
 
 #include "host/base/errors.hpp"
@@ -74,7 +75,20 @@ MoveResult move_axes(BoardLink& l, const std::function<Vec3(const Vec3&)>& targe
     if (r.to[size_t(a)] != r.from[size_t(a)] && cpm == 0) cpm = counts_per_m[size_t(a)];
   if (cpm == 0) return r;
   const double clk = double(l.read(br::CLK_HZ));
-  run_segments(l, plan_move(r.from, r.to, feed_mm_min / 60e3 * cpm, clk));
+  const std::vector<PlannedSegment> segs = plan_move(r.from, r.to, feed_mm_min / 60e3 * cpm, clk);
+  double board_s = 0;
+  for (const PlannedSegment& p : segs) board_s += p.duration;
+  // Said once the first segments are on the board: from here an interrupted
+  // command leaves the board moving until its watchdog stops it.
+  bool said = false;
+  run_segments(l, segs, [&](int, int total) {
+    if (said || !note) return;
+    said = true;
+    char line[96];
+    std::snprintf(line, sizeof line, "moving: %d segment%s, %.3g s of board time", total,
+                  total == 1 ? "" : "s", board_s);
+    note(line);
+  });
   r.moved = true;
   for (int a = 0; a < 3; ++a)
     if (counts_per_m[size_t(a)] != 0) r.pos[size_t(a)] = int32_t(l.read(br::axis(a, br::AX_POS)));

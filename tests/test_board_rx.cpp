@@ -1,0 +1,91 @@
+// Hostile bytes on the board's RX line (fuzz/board_rx.hpp), a bounded run
+// under CTest: random bytes, good frames with bytes flipped, cut short or
+// run together. No burst without a good frame may change a register, draw a
+// reply, or be counted other than as the host's decoder counts it. The
+// libFuzzer target fuzz_board_rx runs the same check on its own inputs.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "fuzz/board_rx.hpp"
+
+namespace mc::test {
+namespace {
+
+namespace hp = host::proto;
+namespace br = board::reg;
+
+// A good request of any kind, to any address, with any value.
+hp::Bytes some_frame(std::mt19937& rng) {
+  const uint16_t addrs[] = {br::CTRL,     br::WDOG,         br::TLM,          br::IP_CTRL,
+                            br::IP_SET_X, uint16_t(0x0203), uint16_t(0x0F00), uint16_t(rng())};
+  const uint16_t addr = addrs[rng() % 8];
+  switch (rng() % 4) {
+    case 0:
+      return hp::encode(hp::write(uint8_t(rng()), addr, uint32_t(rng())));
+    case 1:
+      return hp::encode(hp::read(uint8_t(rng()), addr));
+    case 2: {
+      std::vector<seg::Words> segs(1 + rng() % 6);
+      for (auto& w : segs)
+        for (auto& x : w) x = uint32_t(rng());
+      return hp::encode(hp::segments(uint8_t(rng()), segs));
+    }
+    default:
+      return hp::encode(hp::ping(uint8_t(rng())));
+  }
+}
+
+// Random bytes, or good frames flipped, cut short or with a byte dropped.
+hp::Bytes piece(std::mt19937& rng) {
+  hp::Bytes f;
+  const int kind = int(rng() % 4);
+  if (kind == 0) {
+    f.resize(1 + rng() % 300);
+    for (auto& x : f) x = uint8_t(rng());
+    return f;
+  }
+  f = some_frame(rng);
+  if (kind == 1) {
+    for (int flips = 1 + int(rng() % 3); flips > 0; --flips) f[rng() % f.size()] ^= uint8_t(1 + rng() % 255);
+  } else if (kind == 2) {
+    f.resize(1 + rng() % (f.size() - 1));
+  } else {
+    f.erase(f.begin() + long(rng() % f.size()));
+  }
+  return f;
+}
+
+// A burst: up to 12 pieces back to back, so that one piece's leftovers meet
+// the next piece's start. The quiet line after it ends any partial frame.
+hp::Bytes burst(std::mt19937& rng) {
+  hp::Bytes b;
+  for (int n = 1 + int(rng() % 12); n > 0; --n) {
+    const hp::Bytes p = piece(rng);
+    b.insert(b.end(), p.begin(), p.end());
+  }
+  return b;
+}
+
+TEST(BoardRx, NoBadFrameChangesTheBoard) {
+  fuzz::BoardRx board(7);
+  std::mt19937 rng(11);
+  size_t bytes = 0;
+  int bursts = 0;
+  // A bounded run: 20 k bytes or more, some seconds of simulation.
+  for (; bytes < 20000; ++bursts) {
+    const hp::Bytes b = burst(rng);
+    bytes += b.size();
+    const std::string why = board.feed(b.data(), b.size());
+    ASSERT_EQ(why, "") << "burst " << bursts << " (" << b.size() << " bytes)";
+  }
+  std::printf(
+      "%d bursts, %zu bytes, %llu board clocks, %llu bursts held a good frame, %zu registers watched\n",
+      bursts, bytes, (unsigned long long)board.cycles(), (unsigned long long)board.good_bursts(),
+      board.watched());
+  EXPECT_LT(board.good_bursts(), uint64_t(bursts) / 10) << "the bursts were meant to be bad";
+}
+
+}  // namespace
+}  // namespace mc::test
