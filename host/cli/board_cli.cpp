@@ -134,7 +134,11 @@ SimServer start_sim_server(const std::string& config) {
   while (std::chrono::steady_clock::now() < until) {
     if (auto s = find_sim_server()) return *s;
     const std::string err = error_in_log(log, log_start);
-    if (!err.empty()) throw std::runtime_error("the virtual board did not start: " + err + " (" + log + ")");
+    if (!err.empty()) {
+      std::string msg = "the virtual board did not start: " + err;
+      msg += " (" + log + ")";
+      throw std::runtime_error(msg);
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   throw std::runtime_error("the virtual board did not start within 20 s (see " + log + ")");
