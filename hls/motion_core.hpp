@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <climits>
 #include <cstdint>
+#include <iterator>
 
 #include "interp_core.hpp"
 #include "pid_core.hpp"
@@ -47,6 +48,23 @@ struct MotionIn {
   int16_t drv_ovr_val = 0;
   // sample RAM read: axis << 3 | field
   uint8_t smp_raddr = 0;
+
+  // Field by field (the struct has padding, so not memcmp).
+  bool operator==(const MotionIn& o) const {
+    auto same = [](const auto& x, const auto& y) {
+      return std::equal(std::begin(x), std::end(x), std::begin(y));
+    };
+    return rst == o.rst && pid_we == o.pid_we && pid_waddr == o.pid_waddr && pid_wdata == o.pid_wdata &&
+           pid_re == o.pid_re && pid_raddr == o.pid_raddr && seg_wr == o.seg_wr && seg_wdata == o.seg_wdata &&
+           ip_abort == o.ip_abort && ip_hold == o.ip_hold && ip_clr == o.ip_clr && ip_set == o.ip_set &&
+           same(ip_set_pos, o.ip_set_pos) && same(enc_a, o.enc_a) && same(enc_b, o.enc_b) &&
+           same(enc_z, o.enc_z) && same(enc_filt, o.enc_filt) && same(enc_dir_inv, o.enc_dir_inv) &&
+           same(enc_idx_clr_en, o.enc_idx_clr_en) && same(enc_pos_load, o.enc_pos_load) &&
+           same(enc_pos_load_val, o.enc_pos_load_val) && same(enc_idx_arm, o.enc_idx_arm) &&
+           same(enc_idx_disarm, o.enc_idx_disarm) && same(enc_err_clr, o.enc_err_clr) &&
+           same(drv_allow, o.drv_allow) && same(drv_ovr, o.drv_ovr) && same(drv_ovr_we, o.drv_ovr_we) &&
+           drv_ovr_val == o.drv_ovr_val && smp_raddr == o.smp_raddr;
+  }
 };
 
 template <int NAXES>

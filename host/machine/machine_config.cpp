@@ -246,7 +246,7 @@ PidConfig read_pid(Reader r, double clock_hz) {
     mc::host::core_ts_cycles(p.ts_s, clock_hz, uint32_t(mc::pid_latency(kBoardAxes)), "ts_s");
     mc::host::check_core_kp(p.kp, "kp");
   } catch (const InputError& e) {
-    const std::string key = e.quantity();
+    const std::string& key = e.quantity();
     throw r.error(key, format_number(key == "kp" ? p.kp : p.ts_s), e.expected(), e.problem());
   }
   p.ff1 = r.number("ff1", Range::any, "drive units per count/s");

@@ -77,6 +77,7 @@ VBoardSpeed measure_vboard_speed(const MachineConfig& m, BoardEngine e, const st
           to{out ? stroke : 0, out ? -stroke : 0, 0};
       const auto segs = mc::host::plan_move(from, to, 0.025 * cpm, m.clock_hz);
       std::vector<seg::Words> words;
+      words.reserve(segs.size());
       for (const auto& p : segs) words.push_back(seg::pack(p.seg));
       for (size_t i = 0; i < words.size(); i += 6) {
         const std::vector<seg::Words> batch(words.begin() + long(i),
