@@ -160,7 +160,7 @@ class McRegs {
   uint8_t pid_addr_o() const { return uint8_t(r.addr); }  // pid_waddr_o and pid_raddr_o
   uint32_t data_o() const { return r.data; }  // seg_wdata, pid_wdata, enc_pos_load_val, hw_load_val
   uint16_t drv_ovr_val_o() const { return uint16_t(r.data); }
-  uint8_t ip_set_o() const { return (r.set_t2 & 4) ? uint8_t(1u << (r.set_t2 & 3) & 7) : 0; }
+  uint8_t ip_set_o() const { return (r.set_t2 & 4) ? uint8_t(1u << (r.set_t2 & 3) & 7) : uint8_t(0); }
   uint32_t ip_set_val_o() const { return r.sq; }
   uint8_t smp_raddr_o() const { return uint8_t((r.ra >> 4 & 3) << 3 | ra_fld(r.ra)); }
   bool tx_we_o() const { return w_wr() || x_wr(); }
