@@ -13,7 +13,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
+import threading
 
 BCNC = "/usr/share/bcnc/bCNC"
 if not os.path.isdir(BCNC):
@@ -35,21 +35,38 @@ GUARD_S = 120
 
 
 class Headless(Sender):
-    """The sender of bCNC's application, less its window."""
+    """The sender of bCNC's application, less its window. Every line bCNC's
+    controller parses from the server wakes the waits below (they test what
+    bCNC made of it), and status reports are counted."""
+
+    def __init__(self):
+        Sender.__init__(self)
+        self.heard = threading.Condition()
+        self.reports = 0
+
+    def listen(self):
+        parse = self.mcontrol.parseLine
+
+        def parse_and_tell(line, cline, sline):
+            result = parse(line, cline, sline)
+            with self.heard:
+                if line.startswith("<"):
+                    self.reports += 1
+                self.heard.notify_all()
+            return result
+
+        self.mcontrol.parseLine = parse_and_tell
+
+    def wait_for(self, what, pred):
+        with self.heard:
+            if not self.heard.wait_for(pred, timeout=GUARD_S):
+                raise AssertionError("timed out waiting for " + what + "; state " + str(CNC.vars["state"]))
 
     def disable(self):
         pass
 
     def enable(self):
         pass
-
-
-def wait_for(what, pred):
-    t0 = time.time()
-    while not pred():
-        if time.time() - t0 > GUARD_S:
-            raise AssertionError("timed out waiting for " + what + "; state " + str(CNC.vars["state"]))
-        time.sleep(0.02)
 
 
 def job():
@@ -62,9 +79,11 @@ def job():
 
 def run(device):
     s = Headless()
+    s.listen()
     errors = []
     received = []
     s.open(device, 115200)
+    wait_for = s.wait_for
     wait_for("the first status report", lambda: CNC.vars["state"] == "Idle")
     lines = job()
     # bCNC.Application.run() with the lines given, less its window.
@@ -94,9 +113,9 @@ def run(device):
     s.feedHold()
     wait_for("Hold:0", lambda: CNC.vars["state"] == "Hold:0")
     held = (CNC.vars["mx"], CNC.vars["my"])
-    # Nothing to wait on for "nothing moves": bCNC asks `?` every 125 ms, so
-    # half a second is four reports while held.
-    time.sleep(0.5)
+    # "Nothing moves" is four more status reports at the held position.
+    after = s.reports + 4
+    wait_for("four status reports while held", lambda: s.reports >= after)
     assert CNC.vars["state"] == "Hold:0" and (CNC.vars["mx"], CNC.vars["my"]) == held, \
         "moved while held: %s -> %s" % (held, (CNC.vars["mx"], CNC.vars["my"]))
     print("%s: held at X%.3f Y%.3f" % (device, held[0], held[1]))
