@@ -33,11 +33,15 @@ let dump = () => '';
 function finish(code, why) {
   failed = true;
   if (why) console.log(why);
+  // Remove the work directory once every child has exited.
+  const exited = children.map((c) => (c.exitCode !== null || c.signalCode !== null
+    ? Promise.resolve()
+    : new Promise((resolve) => c.once('exit', resolve))));
   for (const c of children) c.kill('SIGTERM');
-  setTimeout(() => {
+  Promise.all(exited).then(() => {
     fs.rmSync(work, { recursive: true, force: true });
     process.exit(code);
-  }, 300);
+  });
 }
 function fail(why) {
   if (failed) return;
