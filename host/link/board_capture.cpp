@@ -39,8 +39,33 @@ uint32_t telemetry_decimation(double ts_s, double baud, int replies) {
   return uint32_t(std::max(1.0, std::ceil(busy_s / ts_s - 1e-9)));
 }
 
+bool TelemetryUnwrap::take(const proto::Frame& f, proto::Telemetry& t, int64_t& n) {
+  try {
+    t = proto::parse_telemetry(f, mask_);
+  } catch (const InputError&) {
+    return false;  // a frame of an earlier TLM setting
+  }
+  if (!have_) {
+    n = t.sample;
+    have_ = true;
+  } else {
+    const int64_t d = int64_t(uint16_t(t.sample - uint16_t(last_)));
+    n = last_ + d;
+    if (d != int64_t(decim_)) {
+      ++gaps_;
+      missing_ += std::max<int64_t>(0, d / int64_t(decim_) - 1);
+    }
+  }
+  last_ = n;
+  return true;
+}
+
 TelemetryStream::TelemetryStream(BoardLink& l, int axis, uint32_t decim, int64_t ping_every)
-    : l_(l), axis_(axis), decim_(decim), ping_every_(std::max<int64_t>(1, ping_every)) {
+    : l_(l),
+      axis_(axis),
+      decim_(decim),
+      ping_every_(std::max<int64_t>(1, ping_every)),
+      unwrap_(1u << axis, decim) {
   l_.write(br::TLM, 0);
   l_.telemetry().clear();
   l_.write(br::TLM, decim << bb::T_DECIM_LSB | (1u << axis) << bb::T_AXES_LSB);
@@ -57,7 +82,6 @@ TelemetryStream::~TelemetryStream() {
 size_t TelemetryStream::next(std::vector<TlmSample>& out) {
   using Clock = std::chrono::steady_clock;
   auto quiet_since = Clock::now();
-  const unsigned mask = 1u << axis_;
   size_t added = 0;
   while (added == 0) {
     if (g_interrupted.load())
@@ -70,25 +94,10 @@ size_t TelemetryStream::next(std::vector<TlmSample>& out) {
       const proto::Frame f = std::move(q.front());
       q.pop_front();
       proto::Telemetry t;
-      try {
-        t = proto::parse_telemetry(f, mask);
-      } catch (const InputError&) {
-        continue;  // a frame of an earlier TLM setting
-      }
       TlmSample s;
-      if (!have_) {
-        s.n = t.sample;
-        last_ping_ = s.n;
-        have_ = true;
-      } else {
-        const int64_t d = int64_t(uint16_t(t.sample - uint16_t(last_)));
-        s.n = last_ + d;
-        if (d != int64_t(decim_)) {
-          ++gaps_;
-          missing_ += std::max<int64_t>(0, d / int64_t(decim_) - 1);
-        }
-      }
-      last_ = s.n;
+      const bool first = !unwrap_.started();
+      if (!unwrap_.take(f, t, s.n)) continue;
+      if (first) last_ping_ = s.n;
       const proto::AxisSample& a = t.axes.at(0);
       s.pos = a.pos;
       s.cmd = a.cmd;
@@ -100,9 +109,10 @@ size_t TelemetryStream::next(std::vector<TlmSample>& out) {
     }
     const auto now = Clock::now();
     if (added) quiet_since = now;
-    if ((have_ && last_ - last_ping_ >= ping_every_) || now - quiet_since > std::chrono::milliseconds(100)) {
+    if ((unwrap_.started() && unwrap_.last() - last_ping_ >= ping_every_) ||
+        now - quiet_since > std::chrono::milliseconds(100)) {
       l_.transact(proto::ping(0));  // throws when the board no longer answers
-      last_ping_ = last_;
+      last_ping_ = unwrap_.last();
       quiet_since = now;
     }
   }

@@ -45,6 +45,29 @@ struct TlmSample {
   uint16_t fault = 0;
 };
 
+// The link's telemetry frames of one TLM setting (axes mask, decimation) as
+// samples: frames of another setting are dropped, the 16-bit sample count is
+// unwrapped from the first frame's on, and jumps past the decimation are
+// counted, never filled in.
+class TelemetryUnwrap {
+ public:
+  TelemetryUnwrap(unsigned axes_mask, uint32_t decim) : mask_(axes_mask), decim_(decim) {}
+  // False for a frame of another setting; else t and its unwrapped count n.
+  bool take(const proto::Frame& f, proto::Telemetry& t, int64_t& n);
+  bool started() const { return have_; }
+  int64_t last() const { return last_; }
+  // Frames whose count jumped by more than decim, and the samples (at the
+  // decimation) skipped in those jumps.
+  int64_t gaps() const { return gaps_; }
+  int64_t missing() const { return missing_; }
+
+ private:
+  unsigned mask_;
+  uint32_t decim_;
+  bool have_ = false;
+  int64_t last_ = 0, gaps_ = 0, missing_ = 0;
+};
+
 // Streams telemetry for one axis every `decim` samples from construction
 // until destruction (TLM = 0 then). next() waits for the next frames and
 // appends them; it sends a PING every `ping_every` samples of board time, and
@@ -61,8 +84,8 @@ class TelemetryStream {
   size_t next(std::vector<TlmSample>& out);
   // Frames whose sample count jumped by more than decim, and the samples
   // (at the decimation) that were skipped in those jumps.
-  int64_t gaps() const { return gaps_; }
-  int64_t missing() const { return missing_; }
+  int64_t gaps() const { return unwrap_.gaps(); }
+  int64_t missing() const { return unwrap_.missing(); }
   uint32_t decim() const { return decim_; }
 
  private:
@@ -70,9 +93,8 @@ class TelemetryStream {
   int axis_;
   uint32_t decim_;
   int64_t ping_every_;
-  bool have_ = false;
-  int64_t last_ = 0, last_ping_ = 0;
-  int64_t gaps_ = 0, missing_ = 0;
+  TelemetryUnwrap unwrap_;
+  int64_t last_ping_ = 0;
 };
 
 }  // namespace mc::host

@@ -21,11 +21,11 @@ constexpr size_t kBatch = 6;  // segments per SEG frame (the frame's most)
 
 class TelemetryLog {
  public:
-  TelemetryLog(BoardLink& l, unsigned mask, uint32_t decim) : l_(l), mask_(mask), decim_(decim) {
+  TelemetryLog(BoardLink& l, unsigned mask, uint32_t decim) : l_(l), mask_(mask), unwrap_(mask, decim) {
     if (!mask_) return;
     l_.write(br::TLM, 0);
     l_.telemetry().clear();
-    l_.write(br::TLM, decim_ << bb::T_DECIM_LSB | mask_ << bb::T_AXES_LSB);
+    l_.write(br::TLM, decim << bb::T_DECIM_LSB | mask_ << bb::T_AXES_LSB);
   }
   ~TelemetryLog() {
     if (!mask_) return;
@@ -34,6 +34,7 @@ class TelemetryLog {
     } catch (...) {  // the link is gone; the watchdog turns the drives off anyway
     }
   }
+  int64_t gaps() const { return unwrap_.gaps(); }
   TelemetryLog(const TelemetryLog&) = delete;
   TelemetryLog& operator=(const TelemetryLog&) = delete;
 
@@ -44,21 +45,8 @@ class TelemetryLog {
       q.pop_front();
       if (!mask_) continue;
       proto::Telemetry t;
-      try {
-        t = proto::parse_telemetry(f, mask_);
-      } catch (const InputError&) {
-        continue;  // a frame of an earlier TLM setting
-      }
       JobSample s;
-      if (!have_) {
-        s.n = t.sample;
-        have_ = true;
-      } else {
-        const int64_t d = int64_t(uint16_t(t.sample - uint16_t(last_)));
-        s.n = last_ + d;
-        if (d != int64_t(decim_)) ++r.gaps;
-      }
-      last_ = s.n;
+      if (!unwrap_.take(f, t, s.n)) continue;
       for (const proto::AxisSample& a : t.axes) {
         s.pos[size_t(a.axis)] = a.pos;
         s.cmd[size_t(a.axis)] = a.cmd;
@@ -70,9 +58,7 @@ class TelemetryLog {
  private:
   BoardLink& l_;
   unsigned mask_;
-  uint32_t decim_;
-  bool have_ = false;
-  int64_t last_ = 0;
+  TelemetryUnwrap unwrap_;
 };
 
 std::string line_of(const std::vector<Move>& moves, const std::vector<Piece>& p, size_t i) {
@@ -168,6 +154,7 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
     l.poll(std::chrono::milliseconds(1));
   }
   tlm.drain(r);
+  r.gaps = tlm.gaps();
   r.segments = sent_piece.size();
   r.planned_s = pieces.empty() ? 0 : pieces.back().t_end;
   return r;
