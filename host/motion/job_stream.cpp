@@ -70,7 +70,6 @@ std::string line_of(const std::vector<Move>& moves, const std::vector<Piece>& p,
 
 StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std::vector<Piece>& input,
                         const PlannerConfig& cfg, const StreamOptions& o) {
-  (void)cfg;
   StreamResult r;
   std::vector<Piece> pieces = input;
   uint32_t decim = o.telemetry_decim;
@@ -114,12 +113,13 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
         ++next;
         continue;
       }
-      const double t_done = done == 0 ? (sent_piece.empty() ? 0
-                                                            : pieces[sent_piece.front()].t_end -
-                                                                  pieces[sent_piece.front()].seg.duration)
-                                      : pieces[sent_piece[done - 1]].t_end;
-      const double t_sent = sent_piece.empty() ? t_done : pieces[sent_piece.back()].t_end;
-      if (t_sent - t_done >= o.queue_ahead_s && sent_piece.size() - done >= 2) break;
+      // Planned time queued: from the start of the first piece not done to
+      // the end of the last one sent.
+      if (done < sent_piece.size()) {
+        const Piece& first = pieces[sent_piece[done]];
+        const double queued = pieces[sent_piece.back()].t_end - (first.t_end - first.seg.duration);
+        if (queued >= o.queue_ahead_s && sent_piece.size() - done >= 2) break;
+      }
       std::vector<seg::Words> batch;
       size_t k = next;
       while (k < pieces.size() && !pieces[k].action && batch.size() < kBatch)

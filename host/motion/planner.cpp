@@ -263,6 +263,14 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
     if (m.is_motion()) check_travel(m);
     out.push_back(m);
   };
+  // A dwell or an action: the machine stands where it is.
+  auto standing = [&](Move::Kind kind, int line) {
+    Move m;
+    m.kind = kind;
+    m.line = line;
+    m.start = m.end = at;
+    return m;
+  };
   auto line_move = [&](int line, const Vec3d& to, bool rapid, double feed_mm_s) {
     check_axes(line, at, to);
     Move m;
@@ -331,10 +339,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
               line_move(c.line, p, false, feed);
             }
           } else if constexpr (std::is_same_v<T, gcode::Dwell>) {
-            Move m;
-            m.kind = Move::Kind::dwell;
-            m.line = c.line;
-            m.start = m.end = at;
+            Move m = standing(Move::Kind::dwell, c.line);
             m.dwell_s = op.seconds;
             push(m);
           } else if constexpr (std::is_same_v<T, gcode::StraightProbe>) {
@@ -349,10 +354,7 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
             // Nothing moves: T only selects, and the interpreter has turned
             // inverse-time feeds into speeds already.
           } else {
-            Move m;
-            m.kind = Move::Kind::action;
-            m.line = c.line;
-            m.start = m.end = at;
+            Move m = standing(Move::Kind::action, c.line);
             m.action = c.op;
             push(m);
           }
