@@ -131,7 +131,7 @@ bool BoardLink::take(const uint8_t* p, size_t n, const proto::Frame* req, proto:
 bool BoardLink::await(const proto::Frame& req, Clock::time_point deadline, proto::Reply& out) {
   uint8_t buf[256];
   for (;;) {
-    const auto now = Clock::now();
+    const auto now = s_.now();
     if (now >= deadline) return false;
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(1);
@@ -161,12 +161,12 @@ proto::Reply BoardLink::exchange(const proto::Frame& req) {
       ++c_.retransmits;
       dec_.timeout();  // the line was quiet for a whole timeout: a partial frame is dead
     }
-    const auto sent = Clock::now();
+    const auto sent = s_.now();
     s_.write(bytes.data(), bytes.size());
     const auto wait = std::min(o_.max_timeout, timeout() * (1 << std::min(attempt, 2)));
     proto::Reply r;
     if (await(req, sent + wait, r)) {
-      if (attempt == 0) note_rtt(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
+      if (attempt == 0) note_rtt(std::chrono::duration<double, std::milli>(s_.now() - sent).count());
       if (r.status == bp::ST_DUP) ++c_.dups;
       ++c_.requests;
       return r;

@@ -30,6 +30,10 @@ class ByteStream {
   virtual size_t read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) = 0;
   // For messages: "/dev/ttyUSB1".
   virtual std::string name() const = 0;
+  // The clock read()'s timeout runs on, which BoardLink's retransmission
+  // deadlines use too: the wall clock for a port; a simulated board's own
+  // clock, so that a session over it is the same however fast it runs.
+  virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
 };
 
 // A serial port in raw mode, 8N1 at `baud` (the board's 1 Mbaud by default;

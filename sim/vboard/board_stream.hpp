@@ -26,6 +26,11 @@ class BoardStream final : public mc::host::ByteStream {
   void write(const uint8_t* p, size_t n) override { b_.send(p, n); }
   size_t read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) override;
   std::string name() const override { return "virtual board (in process)"; }
+  // Board time: the link's retransmission deadlines count board clocks.
+  std::chrono::steady_clock::time_point now() const override {
+    return std::chrono::steady_clock::time_point(
+        std::chrono::nanoseconds(int64_t(double(b_.cycles()) * 1e9 / b_.clock_hz())));
+  }
 
   std::vector<std::pair<uint64_t, uint8_t>> tx;  // (clock, byte), with log
   std::vector<double> pos;                       // kBoardAxes per run, with log
