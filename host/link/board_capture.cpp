@@ -62,7 +62,6 @@ bool TelemetryUnwrap::take(const proto::Frame& f, proto::Telemetry& t, int64_t& 
 
 TelemetryStream::TelemetryStream(BoardLink& l, int axis, uint32_t decim, int64_t ping_every)
     : l_(l),
-      axis_(axis),
       decim_(decim),
       ping_every_(std::max<int64_t>(1, ping_every)),
       unwrap_(1u << axis, decim) {

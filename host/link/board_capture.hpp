@@ -90,7 +90,6 @@ class TelemetryStream {
 
  private:
   BoardLink& l_;
-  int axis_;
   uint32_t decim_;
   int64_t ping_every_;
   TelemetryUnwrap unwrap_;
