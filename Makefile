@@ -5,6 +5,8 @@ BUILD_SAN  ?= build-san
 BUILD_FUZZ ?= build-fuzz
 # Seconds per fuzz target (make fuzz); docs/reliability.md has the figures.
 FUZZ_SECONDS ?= 60
+# Executions per fuzz target instead of seconds (make fuzz FUZZ_RUNS=10000000).
+FUZZ_RUNS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
@@ -45,9 +47,10 @@ formal: deps
 	FORMAL_DIR=$(BUILD)/formal scripts/formal.sh -j $(JOBS)
 
 # libFuzzer targets (fuzz/), built with clang++ in $(BUILD_FUZZ): each runs
-# FUZZ_SECONDS on its seed corpus; prints executions and crashes per target.
+# FUZZ_SECONDS on its seed corpus (or, with FUZZ_RUNS=N, N executions);
+# prints executions and crashes per target.
 fuzz: deps
-	fuzz/run.sh $(BUILD_FUZZ) $(FUZZ_SECONDS)
+	FUZZ_RUNS=$(FUZZ_RUNS) fuzz/run.sh $(BUILD_FUZZ) $(FUZZ_SECONDS)
 
 format:
 	clang-format -i $$(git ls-files '*.cpp' '*.hpp')

@@ -3,6 +3,9 @@
 # directory and runs each for a set time on a copy of its seed corpus
 # (fuzz/corpus/<target>/), then prints executions and crashes per target.
 # usage: fuzz/run.sh <build-dir> <seconds per target> [target...]
+# With FUZZ_RUNS=N in the environment each target runs until N executions
+# instead (seconds 0: no time limit), the way the figures in
+# docs/reliability.md were made.
 # A crash leaves its input in <build-dir>/crashes/<target>/; rerun it with
 #   <build-dir>/<target> <that file>
 set -euo pipefail
@@ -39,14 +42,16 @@ for t in "${targets[@]}"; do
   args=(-max_total_time="$seconds" -print_final_stats=1 -artifact_prefix="$crashes/" -timeout=10
     -rss_limit_mb=2048 -max_len="${max_len[$t]}")
   [ -n "${dict[$t]:-}" ] && args+=(-dict="${dict[$t]}")
+  [ -n "${FUZZ_RUNS:-}" ] && args+=(-runs="$FUZZ_RUNS")
   log="$build/$t.log"
   set +e
+  start=$SECONDS
   "$build/$t" "${args[@]}" "$work" >"$log" 2>&1
   rc=$?
   set -e
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   n_crash=$(find "$crashes" -type f | wc -l)
-  line=$(printf '%-20s %6s s  %12s executions  %4s execs/s  %d crashes' "$t" "$seconds" "${execs:-?}" \
+  line=$(printf '%-20s %6s s  %12s executions  %4s execs/s  %d crashes' "$t" "$((SECONDS - start))" "${execs:-?}" \
     "$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)" "$n_crash")
   echo "$line"
   summary+=("$line")
@@ -56,6 +61,6 @@ for t in "${targets[@]}"; do
     tail -n 30 "$log" >&2
   fi
 done
-echo "fuzz: ${#targets[@]} targets, $seconds s each"
+echo "fuzz: ${#targets[@]} targets, ${FUZZ_RUNS:+$FUZZ_RUNS executions or }$seconds s each (0: no limit)"
 printf '  %s\n' "${summary[@]}"
 exit $failed
