@@ -44,8 +44,9 @@ CFG[link_rx]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v|-D FORMAL_NO_PAY_RAM||dele
 CFG[link_rx_pay]="link_rx|rtl/link_rx.v rtl/crc16_ccitt.v||||arrays|z3|prove|12|0"
 CFG[quad_decoder]="quad_decoder|rtl/quad_decoder.v||-chparam FILT_W 4||bv|cvc5|prove|4|30"
 CFG[quad_rate]="quad_decoder|rtl/quad_decoder.v|-D FORMAL_QUAD_RATE|-chparam FILT_W 4||bv|cvc5|prove|6|40"
+CFG[step_gen]="step_gen|rtl/step_gen.v||-chparam PW_W 4 -chparam BL_W 3||bv|z3|prove|6|40"
 CFG[seg_fifo_aw4]="seg_fifo|rtl/seg_fifo.v||-chparam AW 4||arrays|z3|prove|4|40"
-ORDER=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo seg_fifo_aw4 link_rx link_rx_pay quad_decoder quad_rate)
+ORDER=(crc16_ccitt uart_tx uart_rx mc_safety step_gen seg_fifo seg_fifo_aw4 link_rx link_rx_pay quad_decoder quad_rate)
 QUICK=(crc16_ccitt uart_tx uart_rx mc_safety seg_fifo link_rx quad_decoder)
 
 # One plausible bug per block, as a sed expression on its files.
@@ -54,6 +55,7 @@ MUT[crc16_ccitt]="s/(crc_o\[15\] ^ sh\[7\]) ? 16'h1021/(crc_o[15] ^ sh[7]) ? 16'
 MUT[uart_tx]="s/left <= 4'd9;/left <= 4'd8;/"                                               # a data bit short
 MUT[uart_rx]="s/valid_o <= rx_i;/valid_o <= 1'b1;/"                                         # no stop-bit check
 MUT[mc_safety]="s/arm_set_i \&\& fault_o == 16'd0) armed_o/arm_set_i) armed_o/"             # arms over a fault
+MUT[step_gen]="s/wire            ready = owed \&\& fwd == dir_o;/wire            ready = owed;/"  # steps the old way
 MUT[seg_fifo]="s/if (do_rd) rp <= rp + 1'b1;/if (do_rd \&\& !do_wr) rp <= rp + 1'b1;/"      # read lost beside a write
 MUT[seg_fifo_aw4]="${MUT[seg_fifo]}"
 MUT[link_rx]="s/{byte_i, crc_lo} == crc/{crc_lo, byte_i} == crc/"                         # CRC bytes swapped

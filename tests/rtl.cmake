@@ -89,3 +89,13 @@ target_link_libraries(test_protocol PRIVATE mc_link)
 add_test(NAME synth_board_icebreaker
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth.sh ${CMAKE_BINARY_DIR}/synth_test)
 set_tests_properties(synth_board_icebreaker PROPERTIES LABELS synth TIMEOUT 1800 RUN_SERIAL ON)
+
+# The step/dir generator of stepper axes: its twin driving a model of a
+# driver's STEP/DIR input, and the RTL against the twin at two widths.
+mc_verilate(vstep_gen TOP step_gen SOURCES ${MC_RTL_DIR}/step_gen.v)
+mc_verilate(vstep_gen_small TOP step_gen PREFIX Vstep_gen_small PARAMS -GPW_W=4 -GBL_W=3
+  SOURCES ${MC_RTL_DIR}/step_gen.v)
+mc_gtest(test_step_gen unit test_step_gen.cpp)
+target_link_libraries(test_step_gen PRIVATE mc_hls)
+mc_gtest(test_step_gen_rtl rtl test_step_gen_rtl.cpp)
+target_link_libraries(test_step_gen_rtl PRIVATE mc_hls vstep_gen vstep_gen_small)
