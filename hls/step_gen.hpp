@@ -60,12 +60,8 @@ struct StepGen {
     else
       backlog_o = (taken + uint32_t(inc) - uint32_t(dec)) & BL_MASK;
 
-    if (in.rst)
-      err_o = false;
-    else if (over || jump)
-      err_o = true;
-    else if (in.clr)
-      err_o = false;
+    // An event in the same clock as clr wins, as in the RTL.
+    err_o = !in.rst && (over || jump || (err_o && !in.clr));
 
     if (in.rst) {
       st = ST_IDLE;

@@ -11,3 +11,7 @@ target_link_libraries(test_cli_plant PRIVATE nlohmann_json::nlohmann_json)
 target_compile_definitions(test_cli_plant PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>"
   MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
 add_dependencies(test_cli_plant motionctl)
+
+# The stepper axis's plant: resonance, detents, followed and lost steps.
+mc_gtest(test_stepper_motor unit test_stepper_motor.cpp)
+target_link_libraries(test_stepper_motor PRIVATE mc_plant)
