@@ -10,7 +10,7 @@ FUZZ_RUNS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint fuzz format clean regs synth prog formal readme-bench
+.PHONY: all deps configure test test-sanitize bench lint fuzz format clean regs synth prog flash formal readme-bench
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -74,8 +74,16 @@ regs: deps configure
 synth: deps
 	scripts/synth.sh $(BUILD)/synth
 
-# Program the iCEBreaker (volatile, into the FPGA's SRAM by default; iceprog
-# without -S writes the flash). Needs the board on USB.
-prog:
-	@test -f $(BUILD)/synth/motioncore_icebreaker.bin || { echo "run make synth first" >&2; exit 2; }
-	iceprog $(BUILD)/synth/motioncore_icebreaker.bin
+# Program the iCEBreaker (board on USB; docs/bringup.md). prog loads the
+# bitstream into the FPGA's configuration SRAM (iceprog -S): it runs at once
+# and is gone at the next power cycle, the safe way to try a build. flash
+# writes it to the board's SPI flash (iceprog without -S), which the FPGA
+# loads at every power-up.
+prog: $(BUILD)/synth/motioncore_icebreaker.bin
+	iceprog -S $<
+
+flash: $(BUILD)/synth/motioncore_icebreaker.bin
+	iceprog $<
+
+$(BUILD)/synth/motioncore_icebreaker.bin:
+	@echo "no bitstream: run make synth first" >&2; exit 2
