@@ -17,3 +17,7 @@ target_link_libraries(test_gcode_properties PRIVATE mc_gcode)
 # The path planner (host/motion/planner) and the job (host/machine/job).
 mc_gtest(test_planner unit test_planner.cpp)
 target_link_libraries(test_planner PRIVATE mc_machine)
+
+# Bed levelling: the height map file and programs deformed by it.
+mc_gtest(test_height_map unit test_height_map.cpp)
+target_link_libraries(test_height_map PRIVATE mc_machine mc_gcode)
