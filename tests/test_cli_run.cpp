@@ -59,6 +59,29 @@ TEST(CliRun, CheckSummarizesAndPathListsEveryMotion) {
   EXPECT_NE(t.err.find(far + ":2: X (machine) = 400 mm"), std::string::npos) << t.err;
 }
 
+// A height map that is a plane, z = 0.01 x + 0.02 y (bilinear interpolation
+// reproduces it exactly): gcode path --level adds it to every Z and splits
+// the cut at the grid lines; a cut leaving the map is refused with its line.
+TEST(CliRun, PathFollowsAHeightMapAndRefusesCutsOutsideIt) {
+  const std::string map = write_program("plane.toml",
+                                        "[map]\nx0_mm = 0\ny0_mm = 0\ndx_mm = 10\ndy_mm = 10\n"
+                                        "heights_mm = [[0, 0.1, 0.2], [0.2, 0.3, 0.4], [0.4, 0.5, 0.6]]\n");
+  const std::string f = write_program("lev.nc", "G21 G90\nG0 X1 Y1\nG1 Z-1 F300\nG1 X19 Y15 F600\n");
+  const Result p = run({"gcode", "path", f, "--csv", "--level", map});
+  ASSERT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_EQ(p.out,
+            "kind,x,y,z,feed_mm_min,cx,cy,cz,dir,plane\n"
+            "rapid,1.0000,1.0000,0.0300,,,,,,\n"
+            "feed,1.0000,1.0000,-0.9700,300.0000,,,,,\n"
+            "feed,10.0000,8.0000,-0.7400,600.0000,,,,,\n"  // x = 10, then y = 10
+            "feed,12.5714,10.0000,-0.6743,600.0000,,,,,\n"
+            "feed,19.0000,15.0000,-0.5100,600.0000,,,,,\n");
+  const std::string out = write_program("out.nc", "G21 G90\nG0 X1 Y1\nG1 Z-1 F300\nG1 X25 F600\n");
+  const Result r = run({"gcode", "check", out, "--level", map});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(out + ":4: cut at X25 Y1"), std::string::npos) << r.err;
+}
+
 // A square with rounded corners, 1 mm deep: about 2 s of motion.
 const char* kJob =
     "G21 G90 G17 G64\n"

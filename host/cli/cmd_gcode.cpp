@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -20,9 +21,19 @@ namespace mc::host::cli {
 namespace {
 
 struct GcodeOptions {
-  std::string file, start = "0,0,0", out;
+  std::string file, start = "0,0,0", out, level;
   bool csv = false;
 };
+
+std::optional<mc::machine::HeightMap> height_map(const GcodeOptions& o) {
+  if (o.level.empty()) return std::nullopt;
+  return mc::machine::load_height_map(o.level);
+}
+
+mc::machine::Job plan(const GcodeOptions& o, const mc::machine::MachineConfig& m, const Vec3d& start) {
+  const std::optional<mc::machine::HeightMap> level = height_map(o);
+  return mc::machine::plan_job(o.file, m, start, level ? &*level : nullptr);
+}
 
 Vec3d parse_start(const std::string& text) {
   Vec3d p{};
@@ -53,9 +64,10 @@ std::string mm(double v) {
 void check(const GcodeOptions& o) {
   const auto m = machine();
   const Vec3d start = parse_start(o.start);
-  const mc::machine::Job j = mc::machine::plan_job(o.file, m, start);
+  const mc::machine::Job j = plan(o, m, start);
   const PlanSummary& s = j.summary;
   std::printf("%s: OK, %d lines\n", o.file.c_str(), j.lines);
+  if (!o.level.empty()) std::printf("  levelled by %s\n", o.level.c_str());
   std::printf("  moves: %d (%d arcs), %d dwells, %d stops for spindle/coolant/tool/program words\n", s.moves,
               s.arcs, s.dwells, s.actions);
   std::printf("  path: %.3f mm cutting, %.3f mm rapid; %zu board segments\n", s.length_mm, s.rapid_mm,
@@ -75,9 +87,15 @@ void check(const GcodeOptions& o) {
 }
 
 void path(const GcodeOptions& o) {
-  const mc::gcode::ProgramResult r = interpret(o.file, parse_start(o.start));
+  const Vec3d start = parse_start(o.start);
+  const std::optional<mc::machine::HeightMap> level = height_map(o);
+  mc::gcode::ProgramResult r = interpret(o.file, start);
+  if (level) {
+    const double tol = mc::machine::planner_config(machine()).arc_tolerance_mm;
+    r.calls = mc::machine::level_calls(r.calls, start, *level, mc::machine::LevelOptions{tol}, o.file);
+  }
   std::printf("kind,x,y,z,feed_mm_min,cx,cy,cz,dir,plane\n");
-  Vec3d at = parse_start(o.start);
+  Vec3d at = start;
   for (const mc::gcode::CanonCall& c : r.calls) {
     std::visit(
         [&](const auto& op) {
@@ -115,7 +133,7 @@ void plot(const GcodeOptions& o) {
   if (o.out.empty()) throw InputError("-o", "(none)", "an output file, e.g. -o path.png");
   const auto m = machine();
   const Vec3d start = parse_start(o.start);
-  const mc::machine::Job j = mc::machine::plan_job(o.file, m, start);
+  const mc::machine::Job j = plan(o, m, start);
   // Check the output is writable before gnuplot runs.
   {
     std::ofstream probe(o.out, std::ios::app);
@@ -138,6 +156,8 @@ void add_gcode_command(CLI::App& app) {
     s->add_option("file", o->file, "G-code program")->required()->type_name("FILE");
     s->add_option("--start", o->start, "where the machine stands, X,Y,Z machine mm (default 0,0,0)")
         ->type_name("X,Y,Z");
+    s->add_option("--level", o->level, "Apply a bed height map (docs/levelling.md), as run --level does")
+        ->type_name("MAP");
     return std::make_pair(s, o);
   };
   auto [c, co] = add("check", "Errors (FILE:LINE:COLUMN, exit 2), or a summary: moves, reach, planned time");

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -28,7 +29,7 @@ namespace mc::host::cli {
 namespace {
 
 struct RunOptions {
-  std::string file, plot, csv;
+  std::string file, plot, csv, level;
   bool json = false, quiet = false;
 };
 
@@ -117,6 +118,8 @@ void run_job(const RunOptions& o) {
   // are checked once the start is known, still before anything moves).
   const mc::gcode::ProgramResult checked = mc::gcode::interpret_file(o.file);
   if (!checked.ok()) throw mc::machine::ProgramErrors(checked.errors);
+  std::optional<mc::machine::HeightMap> level;
+  if (!o.level.empty()) level = mc::machine::load_height_map(o.level);
   for (const auto& [opt, path] : {std::pair{"--plot", o.plot}, std::pair{"--csv", o.csv}}) {
     if (path.empty()) continue;
     std::ofstream probe(path, std::ios::app);
@@ -136,12 +139,13 @@ void run_job(const RunOptions& o) {
   const Vec3 at = enable_axes(l, axes, note);
   mc::machine::arm_following_limits(l, m);  // a runaway trips FERR instead of running on
   const mc::host::PlannerConfig cfg = mc::machine::planner_config(m);
-  const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg));
+  const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg), level ? &*level : nullptr);
   // Ctrl-C from here on stops the job along the path; the line below says so.
   catch_interrupts();
   if (!o.json) {
-    std::printf("running %s: %d moves, %zu segments, planned %s on %s (Ctrl-C stops)\n", o.file.c_str(),
-                j.summary.moves, j.pieces.size(), format_duration(j.summary.time_s).c_str(), b.where.c_str());
+    std::printf("running %s%s: %d moves, %zu segments, planned %s on %s (Ctrl-C stops)\n", o.file.c_str(),
+                level ? (" levelled by " + o.level).c_str() : "", j.summary.moves, j.pieces.size(),
+                format_duration(j.summary.time_s).c_str(), b.where.c_str());
     std::fflush(stdout);
   }
   Progress bar(j, !o.quiet && !o.json);
@@ -240,6 +244,9 @@ void add_run_command(CLI::App& app) {
       ->type_name("FILE");
   cmd->add_option("--csv", o->csv, "The telemetry samples: time, command and position per axis, mm")
       ->type_name("FILE");
+  cmd->add_option("--level", o->level,
+                  "Follow the bed: a height map (docs/levelling.md) added to every Z, moves split per cell")
+      ->type_name("MAP");
   cmd->add_flag("--json", o->json, "The report as one JSON object");
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
   cmd->callback([o] { run_job(*o); });

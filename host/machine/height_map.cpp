@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -157,8 +158,15 @@ class Leveler {
 
   void require_inside(const Vec3& p) const {
     if (map_.contains(p[0], p[1], 1e-6)) return;
-    throw InputError(place() + ": cut at X" + host::format_number(p[0]) + " Y" + host::format_number(p[1]),
-                     "outside the height map",
+    const auto mm = [](double v) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%.3f", v);
+      std::string t = b;  // 12.500 -> 12.5, 25.000 -> 25
+      while (t.back() == '0') t.pop_back();
+      if (t.back() == '.') t.pop_back();
+      return t;
+    };
+    throw InputError(place() + ": cut at X" + mm(p[0]) + " Y" + mm(p[1]), "outside the height map",
                      "X " + host::format_number(map_.x0) + ".." + host::format_number(map_.x1()) + ", Y " +
                          host::format_number(map_.y0) + ".." + host::format_number(map_.y1()),
                      "the map says nothing there: probe a larger area");

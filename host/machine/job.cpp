@@ -45,7 +45,8 @@ std::string list(const std::vector<mc::gcode::Error>& errors) {
 ProgramErrors::ProgramErrors(std::vector<mc::gcode::Error> errors)
     : std::runtime_error(list(errors)), errors_(std::move(errors)) {}
 
-Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m, const Vec3d& start) {
+Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m, const Vec3d& start,
+                 const HeightMap* level) {
   mc::gcode::Options o;
   o.start = start;
   const mc::gcode::ProgramResult prog = mc::gcode::interpret_program(text, name, o);
@@ -54,19 +55,21 @@ Job plan_program(std::string_view text, const std::string& name, const MachineCo
   j.file = name;
   j.cfg = planner_config(m);
   j.lines = prog.lines;
-  j.moves = mc::host::to_moves(prog.calls, start, j.cfg, name);
+  const std::vector<mc::gcode::CanonCall> calls =
+      level ? level_calls(prog.calls, start, *level, LevelOptions{j.cfg.arc_tolerance_mm}, name) : prog.calls;
+  j.moves = mc::host::to_moves(calls, start, j.cfg, name);
   mc::host::plan_speeds(j.moves, j.cfg);
   j.pieces = mc::host::chop(j.moves, j.cfg);
   j.summary = mc::host::summarize(j.moves, j.pieces, j.cfg);
   return j;
 }
 
-Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start) {
+Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start, const HeightMap* level) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("G-code file", mc::host::quote(path), "a readable file", "cannot open");
   std::ostringstream text;
   text << in.rdbuf();
-  return plan_program(text.str(), path, m, start);
+  return plan_program(text.str(), path, m, start, level);
 }
 
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,

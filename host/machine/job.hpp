@@ -11,6 +11,7 @@
 
 #include "host/control/metrics.hpp"
 #include "host/gcode/interpreter.hpp"
+#include "host/machine/height_map.hpp"
 #include "host/machine/machine_config.hpp"
 #include "host/motion/job_stream.hpp"
 #include "host/motion/planner.hpp"
@@ -39,13 +40,16 @@ struct Job {
   mc::host::PlanSummary summary;
 };
 
-// Interprets the whole file from `start` (machine mm) and plans it. Throws
-// ProgramErrors for G-code errors and InputError ("FILE:line N: ...") for
-// what the machine cannot do (travel, an absent axis, a probe); in both
-// cases before anything moves.
-Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Vec3d& start);
+// Interprets the whole file from `start` (machine mm) and plans it; with
+// `level`, the program follows that height map (height_map.hpp), arcs and
+// splits within the machine's arc tolerance. Throws ProgramErrors for
+// G-code errors and InputError ("FILE:line N: ...") for what the machine
+// cannot do (travel, an absent axis, a probe, a cut outside the map); in
+// every case before anything moves.
+Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Vec3d& start,
+             const HeightMap* level = nullptr);
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m,
-                 const mc::host::Vec3d& start);
+                 const mc::host::Vec3d& start, const HeightMap* level = nullptr);
 
 struct JobReport {
   double planned_s = 0;  // of what ran
