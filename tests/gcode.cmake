@@ -21,3 +21,5 @@ target_link_libraries(test_planner PRIVATE mc_machine)
 # Bed levelling: the height map file and programs deformed by it.
 mc_gtest(test_height_map unit test_height_map.cpp)
 target_link_libraries(test_height_map PRIVATE mc_machine mc_gcode)
+mc_gtest(test_workpiece unit test_workpiece.cpp)
+target_link_libraries(test_workpiece PRIVATE mc_machine mc_motion mc_gcode)

@@ -8,6 +8,7 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "hls/board_regs.hpp"
 #include "hls/pid_core.hpp"
@@ -320,6 +321,32 @@ PlannerSettings read_planner(Reader r) {
   return p;
 }
 
+WorkpieceConfig read_workpiece(Reader r) {
+  WorkpieceConfig w;
+  w.min_x_m = r.number("min_x_m", Range::any, "m");
+  w.min_y_m = r.number("min_y_m", Range::any, "m");
+  w.max_x_m = r.number("max_x_m", Range::any, "m");
+  w.max_y_m = r.number("max_y_m", Range::any, "m");
+  w.top_z_m = r.number("top_z_m", Range::any, "m");
+  w.tilt_x = r.number("tilt_x", Range::any, "m/m");
+  w.tilt_y = r.number("tilt_y", Range::any, "m/m");
+  w.bow_m = r.number("bow_m", Range::any, "m");
+  w.noise_m = r.number("noise_m", Range::non_negative, "m", 1e-3, "a machined or cast face");
+  w.noise_seed = r.integer("noise_seed", 0, 1 << 30, "");
+  for (const auto& [lo, hi, a, b] : {std::tuple{"min_x_m", "max_x_m", w.min_x_m, w.max_x_m},
+                                     std::tuple{"min_y_m", "max_y_m", w.min_y_m, w.max_y_m}})
+    if (!(b > a))
+      throw r.error(hi, format_number(b), std::string(hi) + " > " + lo + " = " + format_number(a));
+  // A bed a few tenths out, not a ramp: beyond these a probe would not find it.
+  for (const auto& [key, v, most] : {std::tuple{"tilt_x", w.tilt_x, 0.1}, std::tuple{"tilt_y", w.tilt_y, 0.1},
+                                     std::tuple{"bow_m", w.bow_m, 0.01}})
+    if (std::abs(v) > most)
+      throw r.error(key, format_number(v), "at most " + format_number(most) + " either way",
+                    "above the range");
+  r.finish();
+  return w;
+}
+
 std::string lower(std::string_view s) {
   std::string l(s);
   for (char& c : l) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -367,6 +394,7 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
     r.finish();
   }
   if (top.has("planner")) m.planner = read_planner(top.table("planner"));
+  if (top.has("workpiece")) m.workpiece = read_workpiece(top.table("workpiece"));
   Reader axes = top.table("axis");
   const std::vector<std::string> names = {"x", "y", "z"};
   for (const std::string& k : axes.keys()) {

@@ -9,6 +9,7 @@
 // so that a misspelt key can never fall back to a default silently.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -77,12 +78,27 @@ struct PlannerSettings {
   double queue_ahead_s = 0.25;         // motion kept queued on the board while streaming
 };
 
+// [workpiece], optional: the part on the bed, whose top face the virtual
+// machine's probe touches and levelling follows (host/machine/workpiece.hpp).
+// Its top face: a plane through top_z_m at the min corner with slopes tilt_x
+// and tilt_y, a dish bow_m deep in the middle (0 at the edges), and a smooth
+// random roughness of noise_m RMS.
+struct WorkpieceConfig {
+  double min_x_m = 0, min_y_m = 0, max_x_m = 0.2, max_y_m = 0.15;
+  double top_z_m = 0;
+  double tilt_x = 0, tilt_y = 0;  // m/m
+  double bow_m = 0;
+  double noise_m = 0;
+  int noise_seed = 1;
+};
+
 struct MachineConfig {
   std::string source;  // file path or "built-in default"
   double clock_hz = 12e6;
   double plant_dt_s = 1e-6;
   std::vector<AxisConfig> axes;  // x, y, optional z, in that order
   PlannerSettings planner;
+  std::optional<WorkpieceConfig> workpiece;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;
