@@ -109,7 +109,7 @@ double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHisto
 // difference per sample, and the command moves in whole counts: Fitted
 // keeps each term only where a one-count pulse of it fits the output
 // (FF1/Ts <= out_limit, FF2/Ts^2 <= out_limit/8), which on the default
-// machine drops FF2 below about 0.5 ms (docs/cosim.md has the measurement).
+// machine drops FF2 at 100 us and below (docs/cosim.md has the measurement).
 enum class FeedForward { None, Velocity, Full, Fitted };
 const char* feedforward_name(FeedForward f);             // none, vel, vel+acc, fitted
 FeedForward parse_feedforward(const std::string& name);  // InputError naming --feedforward
