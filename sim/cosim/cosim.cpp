@@ -20,7 +20,6 @@
 #include "hls/pid_regs.hpp"
 #include "host/base/errors.hpp"
 #include "host/motion/interp_plan.hpp"
-#include "profile_program.hpp"
 #include "sim/cosim/core_model.hpp"
 #include "sim/cosim/rtl_core.hpp"
 #include "sim/plant/dc_motor.hpp"
@@ -110,10 +109,6 @@ std::vector<Scenario> bench_scenarios(bool quick) {
           {"line-45", ScenarioKind::Line, line, 45, feed, line / feed + settle, nullptr},
           {"line-30", ScenarioKind::Line, line, 30, feed, line / feed + settle, nullptr},
           {"circle", ScenarioKind::Circle, radius, 0, feed, 2 * M_PI * radius / feed + settle, nullptr}};
-}
-
-std::string_view profile_program() {
-  return generated::kProfileProgram;
 }
 
 std::string_view quick_job_program() {
