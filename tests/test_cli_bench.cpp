@@ -27,14 +27,20 @@ TEST(CliBench, QuickRunWritesReportCsvAndPlots) {
   const auto r = run({"bench", "--quick", "--jobs", "2", "--out", dir.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string csv = read(dir / "results.csv");
-  // Header plus 6 platforms x 4 scenarios x 2 policies.
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 6 * 4 * 2);
+  // Header plus 6 platforms x 4 scenarios x 2 policies, and the job on its
+  // 4 default platforms without and with feed-forward.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 6 * 4 * 2 + 4 * 2);
   EXPECT_EQ(csv.rfind("platform,scenario,policy,engine,ts_s,", 0), 0u);
+  EXPECT_NE(csv.find("\nfpga-100us,job,tuned,twin,"), std::string::npos);
   const std::string md = read(dir / "report.md");
   EXPECT_NE(md.find("## circle, tuned gains"), std::string::npos);
   EXPECT_NE(md.find("| fpga-min |"), std::string::npos);
+  EXPECT_NE(md.find("## job, tuned gains, without and with feed-forward"), std::string::npos);
+  EXPECT_NE(md.find("| job, RMS contour error |"), std::string::npos);
+  EXPECT_EQ(md.find("| **yes** |"), std::string::npos) << "a job's queue ran dry";
   EXPECT_NE(r.out.find("## Reading"), std::string::npos);
-  for (const char* png : {"following_step_same.png", "circle_xy_tuned.png", "contour_vs_ts.png"})
+  for (const char* png : {"following_step_same.png", "circle_xy_tuned.png", "contour_vs_ts.png",
+                          "job_contour_vs_ts.png", "job_contour_path.png"})
     EXPECT_GT(fs::file_size(dir / "plots" / png), 1000u) << png;
   fs::remove_all(dir);
 }
@@ -53,6 +59,8 @@ TEST(CliBench, BadArgumentsGiveOneErrorLine) {
   expect_one_error_line({"bench", "--engine", "spice"}, "--engine");
   expect_one_error_line({"bench", "--platform", "fpga-1s", "--quick"}, "platform");
   expect_one_error_line({"cosim", "--scenario", "zigzag"}, "scenario");
+  expect_one_error_line({"cosim", "--scenario", "job", "--job", "/nonexistent/job.nc"}, "--job");
+  expect_one_error_line({"cosim", "--scenario", "job", "--feedforward", "lots"}, "--feedforward");
   expect_one_error_line({"cosim", "--platform", "host-10ms", "--trace", "x.fst"}, "--trace");
   expect_one_error_line({"bench", "--config", "/nonexistent/machine.toml"}, "machine.toml");
 }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "hls/interp_seg.hpp"
+#include "host/base/errors.hpp"
 #include "sim/cosim/cosim.hpp"
 
 namespace mc::sim {
@@ -81,6 +83,97 @@ TEST(Cosim, StepResponseOfTheFpgaLoop) {
   print(slow);
   EXPECT_TRUE(slow.tracking);
   EXPECT_GT(slow.step.rise_s, 2 * r.step.rise_s);
+}
+
+// The job scenario's contour error (host/machine/job's measure on the
+// streamed, planned program) against an independent computation: the
+// metrics library's distance to the analytic lines and arc, on the same
+// recorded positions.
+TEST(Cosim, JobContourMatchesTheAnalyticPath) {
+  RunSpec s = spec_for("fpga-1ms", "step", Engine::Twin);
+  s.policy = GainPolicy::Tuned;
+  s.scenario = job_scenario(s.machine, "G21 G90 G17 G94\nG1 X4 F900\nG3 X4 Y4 I0 J2\nG1 X0\nM2\n", "t.nc");
+  s.record_dt_s = 1e-4;
+  const RunResult r = run_isolated(s);
+  print(r);
+  // Metres: the line (0,0)-(4,0) mm, the half circle about (4,2) mm from
+  // -90 to +90 degrees (G3: counter-clockwise), the line (4,4)-(0,4) mm.
+  const std::vector<PathPiece> path{Segment{{0, 0}, {4e-3, 0}}, Arc{{4e-3, 2e-3}, 2e-3, -M_PI / 2, M_PI},
+                                    Segment{{4e-3, 4e-3}, {0, 4e-3}}};
+  std::vector<Point2> pts;
+  for (size_t i = 0; i < r.t.size(); ++i) pts.push_back({r.pos_m[0][i], r.pos_m[1][i]});
+  const ErrorStats want = contour_error(pts, path);
+  EXPECT_EQ(r.contour.n, want.n);
+  EXPECT_NEAR(r.contour.rms, want.rms, 1e-12);
+  EXPECT_NEAR(r.contour.max, want.max, 1e-12);
+  ASSERT_EQ(r.contour_each.size(), pts.size());
+  for (size_t i = 0; i < pts.size(); i += 97) EXPECT_NEAR(r.contour_each[i], distance(path, pts[i]), 1e-12);
+  // A loop at 1 ms follows a 15 mm/s path to a few counts, ends on it, and
+  // the streamed queue never ran dry.
+  EXPECT_GT(r.contour.rms, 0);
+  EXPECT_LT(r.contour.max, 25e-6);
+  EXPECT_FALSE(r.underrun);
+  EXPECT_TRUE(r.tracking);
+  EXPECT_NEAR(r.pos_m[0].back(), 0, 2.0 / counts_per_m(s.machine.axes[0]));
+  EXPECT_NEAR(r.pos_m[1].back(), 4e-3, 2.0 / counts_per_m(s.machine.axes[0]));
+}
+
+// Streaming by the queue's level: a job that fits the FIFO (all its words
+// written at the start, as the scenarios were before streaming) and the same
+// job fed two segments at a time give the same run, bit for bit; and the
+// Verilated core, fed by the levels it shows, writes at the same clocks.
+TEST(Cosim, StreamedQueueGivesTheAllAtOnceRun) {
+  RunSpec s = spec_for("fpga-100us", "step", Engine::Twin);
+  s.policy = GainPolicy::Tuned;
+  s.feedforward = FeedForward::Fitted;
+  s.scenario = job_scenario(s.machine, "G21 G90 G17 G94\nG1 X1 F600\nG1 Y1\nG3 X0 Y2 I-1 J0\nG1 X-0.5\nM2\n",
+                            "t.nc", 0.02);
+  const size_t segs = s.scenario.job->pieces.size();
+  ASSERT_GE(segs, 10u);                          // enough to stream
+  ASSERT_LE(segs * seg::SEG_WORDS, 512u - 10u);  // and all fit at once
+  const RunResult all = run_isolated(s);
+  s.queue_words = 2 * seg::SEG_WORDS;
+  const RunResult fed = run_isolated(s);
+  s.engine = Engine::Rtl;
+  const RunResult rtl = run_isolated(s);
+  print(all);
+  print(fed);
+  print(rtl);
+  ASSERT_GT(all.sample_u[0].size(), 1000u);
+  for (const RunResult* r : {&fed, &rtl}) {
+    EXPECT_EQ(r->sample_clock, all.sample_clock);
+    EXPECT_EQ(r->sample_u[0], all.sample_u[0]);
+    EXPECT_EQ(r->sample_u[1], all.sample_u[1]);
+    EXPECT_EQ(r->pos_m[0], all.pos_m[0]);
+    EXPECT_EQ(r->cmd_m[1], all.cmd_m[1]);
+    EXPECT_EQ(r->contour.rms, all.contour.rms);
+    EXPECT_FALSE(r->underrun);
+  }
+  EXPECT_GT(fed.clocks_skipped, 0u);
+  // A window below one segment is a bug in the caller.
+  s.engine = Engine::Twin;
+  s.queue_words = 5;
+  EXPECT_THROW(run_isolated(s), std::runtime_error);
+}
+
+// The fitted feed-forward keeps what the core can apply at its Ts: both
+// terms at 1 ms, the velocity term alone at 100 us on the default machine.
+TEST(Cosim, FittedFeedForward) {
+  const MachineConfig m = machine::default_machine();
+  const JitterHistogram j = default_jitter();
+  const AxisModel g = axis_model(m.axes[0]);
+  const auto ff = [&](const char* p, FeedForward f) {
+    return gains_for(m, m.axes[0], find_platform(m, p), GainPolicy::Tuned, j, f);
+  };
+  EXPECT_DOUBLE_EQ(ff("fpga-1ms", FeedForward::Fitted).ff1, 1 / g.kg);
+  EXPECT_DOUBLE_EQ(ff("fpga-1ms", FeedForward::Fitted).ff2, g.tau / g.kg);
+  EXPECT_DOUBLE_EQ(ff("fpga-100us", FeedForward::Fitted).ff1, 1 / g.kg);
+  EXPECT_EQ(ff("fpga-100us", FeedForward::Fitted).ff2, 0);
+  EXPECT_DOUBLE_EQ(ff("fpga-100us", FeedForward::Full).ff2, g.tau / g.kg);
+  EXPECT_EQ(ff("fpga-min", FeedForward::Velocity).ff2, 0);
+  EXPECT_EQ(ff("fpga-min", FeedForward::None).ff1, 0);
+  EXPECT_EQ(parse_feedforward("vel+acc"), FeedForward::Full);
+  EXPECT_THROW(parse_feedforward("lots"), mc::host::InputError);
 }
 
 // The tuned rule: the bandwidth falls with the loop delay, never rises above

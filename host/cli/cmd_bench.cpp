@@ -1,6 +1,7 @@
 // motionctl bench: the sample-period benchmark (sim/bench.hpp). Every
 // platform (the 10 ms PC loop, the FPGA loop at 10 ms down to its shortest
-// Ts) on every scenario under both gain policies, co-simulated; writes
+// Ts) on every scenario under both gain policies, and the G-code job with
+// tuned gains without and with feed-forward, co-simulated; writes
 // report.md, results.csv and plots, and prints the report.
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -28,11 +29,11 @@ namespace mc::host::cli {
 namespace {
 
 struct BenchCli {
-  std::string out = "build/bench", config, jitter, engine = "twin", policy = "both";
+  std::string out = "build/bench", config, jitter, engine = "twin", policy = "both", job;
   bool quick = false, json = false, no_plots = false, no_rtl_check = false, no_vboard_speed = false;
   int jobs = 0;
   uint64_t seed = 1;
-  std::vector<std::string> platforms, scenarios;
+  std::vector<std::string> platforms, scenarios, job_platforms;
 };
 
 // A progress bar on a terminal; otherwise one line per finished run.
@@ -116,6 +117,8 @@ void bench_command(const BenchCli& c) {
   o.seed = c.seed;
   o.platforms = c.platforms;
   o.scenarios = c.scenarios;
+  o.job_file = c.job;
+  if (!c.job_platforms.empty()) o.job_platforms = c.job_platforms;
   o.plots = !c.no_plots;
   o.rtl_check = !c.no_rtl_check;
   Progress progress;
@@ -129,10 +132,12 @@ void bench_command(const BenchCli& c) {
                    {"scenario", x.scenario},
                    {"policy", x.policy},
                    {"engine", x.engine},
+                   {"feedforward", x.feedforward},
                    {"ts_s", x.gains.ts},
                    {"follow_rms_x_um", x.follow[0].rms * 1e6},
                    {"follow_rms_y_um", x.follow[1].rms * 1e6},
                    {"contour_rms_um", x.contour.rms * 1e6},
+                   {"contour_max_um", x.contour.max * 1e6},
                    {"tracking", x.tracking},
                    {"sim_speed", x.sim_s / x.wall_s}});
     std::cout << nlohmann::json{{"runs", j}, {"files", files}}.dump(2) << "\n";
@@ -147,8 +152,10 @@ void bench_command(const BenchCli& c) {
 
 struct CosimCli {
   std::string config, jitter, engine = "rtl", policy = "same", platform = "fpga-100us", scenario = "step",
-                              trace, csv;
+                              trace, csv, job;
+  std::string feedforward = "none";
   bool quick = false, json = false;
+  int queue_words = 0;
   uint64_t seed = 1;
 };
 
@@ -159,7 +166,12 @@ void cosim_command(const CosimCli& c) {
   if (!c.trace.empty()) require_writable_file(c.trace, "--trace");
   s.jitter = jitter_or_default(c.jitter);
   s.platform = mc::sim::find_platform(s.machine, c.platform);
-  s.scenario = mc::sim::find_scenario(c.scenario, c.quick);
+  s.scenario = c.scenario == "job" ? mc::sim::bench_job(s.machine, c.job, c.quick)
+                                   : mc::sim::find_scenario(c.scenario, c.quick);
+  if (!c.job.empty() && c.scenario != "job")
+    throw InputError("--job", "'" + c.job + "'", "--scenario job with it");
+  s.feedforward = mc::sim::parse_feedforward(c.feedforward);
+  s.queue_words = c.queue_words;
   s.engine = parse_engine(c.engine);
   s.policy = *parse_policy(c.policy, false);
   if (!c.trace.empty() && (s.platform.host || s.engine != mc::sim::Engine::Rtl))
@@ -167,7 +179,8 @@ void cosim_command(const CosimCli& c) {
                      "an FPGA platform with --engine rtl (the waveform is the RTL's)");
   s.fst_path = c.trace;
   s.seed = c.seed;
-  s.record_dt_s = 1e-5;
+  // A job's seconds: every 100 us (2 um of travel at its 1200 mm/min).
+  s.record_dt_s = c.scenario == "job" ? 1e-4 : 1e-5;
   const mc::sim::RunResult r = mc::sim::run_isolated(s);
   if (!c.csv.empty()) {
     std::ofstream f(c.csv);
@@ -183,6 +196,7 @@ void cosim_command(const CosimCli& c) {
                      {"scenario", r.scenario},
                      {"policy", r.policy},
                      {"engine", r.engine},
+                     {"feedforward", r.feedforward},
                      {"ts_s", r.gains.ts},
                      {"kp", r.gains.kp},
                      {"ki", r.gains.ki},
@@ -204,12 +218,19 @@ void cosim_command(const CosimCli& c) {
       j["contour_rms_um"] = r.contour.rms * 1e6;
       j["contour_max_um"] = r.contour.max * 1e6;
     }
+    if (r.scenario == "job") {
+      j["measured_contour_rms_um"] = r.measured_contour.rms * 1e6;
+      j["measured_contour_max_um"] = r.measured_contour.max * 1e6;
+      j["underrun"] = r.underrun;
+    }
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::printf("%s on %s, %s gains, %s engine: Ts %.6g s, kp %.6g ki %.6g kd %.6g tf %.6g\n",
-              r.scenario.c_str(), r.platform.c_str(), r.policy.c_str(), r.engine.c_str(), r.gains.ts,
-              r.gains.kp, r.gains.ki, r.gains.kd, r.gains.tf);
+  std::printf(
+      "%s on %s, %s gains%s, %s engine: Ts %.6g s, kp %.6g ki %.6g kd %.6g tf %.6g ff1 %.6g ff2 %.6g\n",
+      r.scenario.c_str(), r.platform.c_str(), r.policy.c_str(),
+      r.feedforward == "none" ? "" : (" + feed-forward " + r.feedforward).c_str(), r.engine.c_str(),
+      r.gains.ts, r.gains.kp, r.gains.ki, r.gains.kd, r.gains.tf, r.gains.ff1, r.gains.ff2);
   std::printf("following error x: RMS %.3f um, max %.3f um; y: RMS %.3f um, max %.3f um\n",
               r.follow[0].rms * 1e6, r.follow[0].max * 1e6, r.follow[1].rms * 1e6, r.follow[1].max * 1e6);
   if (step)
@@ -218,6 +239,10 @@ void cosim_command(const CosimCli& c) {
         r.step.rise_s * 1e3, r.step.overshoot_pct, r.step.settling_s * 1e3, r.step.ss_error * 1e6);
   else
     std::printf("contour error: RMS %.3f um, max %.3f um\n", r.contour.rms * 1e6, r.contour.max * 1e6);
+  if (r.scenario == "job")
+    std::printf("contour error of the encoder counts: RMS %.3f um, max %.3f um; %s\n",
+                r.measured_contour.rms * 1e6, r.measured_contour.max * 1e6,
+                r.underrun ? "the queue RAN DRY" : "no underrun");
   std::printf("%s; %zu controller samples; %.3f s simulated in %.3f s (%.3gx real time)\n",
               r.tracking ? "tracking at the end" : "NOT TRACKING at the end", r.sample_u[0].size(), r.sim_s,
               r.wall_s, r.sim_s / r.wall_s);
@@ -232,7 +257,15 @@ void add_cosim_command(CLI::App& app) {
   cmd->add_option("--platform", c->platform,
                   "host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us or fpga-min")
       ->capture_default_str();
-  cmd->add_option("--scenario", c->scenario, "step, line-45, line-30 or circle")->capture_default_str();
+  cmd->add_option("--scenario", c->scenario, "step, line-45, line-30, circle or job")->capture_default_str();
+  cmd->add_option("--job", c->job,
+                  "G-code file of --scenario job (default: the built-in examples/profile.nc)");
+  cmd->add_option("--feedforward", c->feedforward,
+                  "The core's feed-forward from the axis model: none, vel, vel+acc, or fitted (each term "
+                  "where a one-count pulse of it fits the output)")
+      ->capture_default_str();
+  cmd->add_option("--queue-words", c->queue_words,
+                  "Most segment words kept in the core's queue (default: its FIFO's whole segments)");
   cmd->add_option("--policy", c->policy, "Gain policy: same or tuned")->capture_default_str();
   cmd->add_option("--engine", c->engine, "FPGA model: rtl (Verilated) or twin (hls/ C++)")
       ->capture_default_str();
@@ -263,7 +296,12 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--policy", c->policy, "Gain policy: same, tuned or both")->capture_default_str();
   cmd->add_option("--platform", c->platforms,
                   "Only these platforms (host-10ms, fpga-10ms, fpga-1ms, fpga-100us, fpga-10us, fpga-min)");
-  cmd->add_option("--scenario", c->scenarios, "Only these scenarios (step, line-45, line-30, circle)");
+  cmd->add_option("--scenario", c->scenarios, "Only these scenarios (step, line-45, line-30, circle, job)");
+  cmd->add_option("--job", c->job,
+                  "G-code file of the job scenario (default: the built-in examples/profile.nc)");
+  cmd->add_option("--job-platform", c->job_platforms,
+                  "Platforms of the job scenario unless --platform is given (default: host-10ms, fpga-10ms, "
+                  "fpga-1ms, fpga-100us)");
   cmd->add_option("--jobs", c->jobs, "Runs at once (default: the number of CPUs)");
   cmd->add_option("--seed", c->seed, "Seed of the host loop's jitter draws")->capture_default_str();
   cmd->add_option("--config", c->config, "Machine TOML (default: the built-in configs/default.toml)");

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "host/base/errors.hpp"
 
@@ -74,6 +75,23 @@ Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start
 
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
                                    const std::vector<Move>& moves, const mc::host::PlannerConfig& cfg) {
+  std::vector<std::array<int32_t, 3>> cmd;
+  std::vector<Vec3d> pos;
+  cmd.reserve(samples.size());
+  pos.reserve(samples.size());
+  for (const mc::host::JobSample& s : samples) {
+    cmd.push_back(s.cmd);
+    pos.push_back(mc::host::to_mm(mc::host::Vec3{s.pos[0], s.pos[1], s.pos[2]}, cfg));
+  }
+  return contour_error(cmd, pos, moves, cfg);
+}
+
+mc::host::ErrorStats contour_error(const std::vector<std::array<int32_t, 3>>& cmds,
+                                   const std::vector<Vec3d>& pos_mm, const std::vector<Move>& moves,
+                                   const mc::host::PlannerConfig& cfg, std::vector<double>* each) {
+  if (cmds.size() != pos_mm.size())
+    throw std::invalid_argument("contour_error: as many positions as commands are needed");
+  if (each) each->assign(cmds.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<size_t> path;  // indices of the motion moves
   for (size_t i = 0; i < moves.size(); ++i)
     if (moves[i].is_motion()) path.push_back(i);
@@ -84,9 +102,9 @@ mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& sampl
   double cell = 0;
   for (const mc::host::AxisLimits& a : cfg.axes)
     if (a.present) cell = std::max(cell, 1.0 / a.counts_per_mm);
-  for (const mc::host::JobSample& s : samples) {
-    mc::host::Vec3 c{s.cmd[0], s.cmd[1], s.cmd[2]}, p{s.pos[0], s.pos[1], s.pos[2]};
-    const Vec3d cmd = mc::host::to_mm(c, cfg), pos = mc::host::to_mm(p, cfg);
+  for (size_t i = 0; i < cmds.size(); ++i) {
+    const Vec3d cmd = mc::host::to_mm(mc::host::Vec3{cmds[i][0], cmds[i][1], cmds[i][2]}, cfg);
+    const Vec3d& pos = pos_mm[i];
     // The move the command is on: the nearest in a window ahead (the
     // command lies on the path to a count or two; at a junction both moves
     // hold it and the later one wins).
@@ -107,6 +125,7 @@ mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& sampl
     double d = std::numeric_limits<double>::infinity();
     const size_t lo = at >= 8 ? at - 8 : 0, hi = std::min(path.size(), at + 9);
     for (size_t k = lo; k < hi; ++k) d = std::min(d, mc::host::distance_to(moves[path[k]], pos));
+    if (each) (*each)[i] = d;
     sum2 += d * d;
     st.max = std::max(st.max, d);
     ++st.n;

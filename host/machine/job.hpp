@@ -72,6 +72,14 @@ struct JobReport {
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
                                    const std::vector<mc::host::Move>& moves,
                                    const mc::host::PlannerConfig& cfg);
+// The same with each sample's position in mm (cmd[i] in counts goes with
+// pos_mm[i]): a simulation's true table position, which no encoder rounds.
+// each (optional): every sample's distance, mm, NaN where the command is on
+// a rapid.
+mc::host::ErrorStats contour_error(const std::vector<std::array<int32_t, 3>>& cmd,
+                                   const std::vector<mc::host::Vec3d>& pos_mm,
+                                   const std::vector<mc::host::Move>& moves,
+                                   const mc::host::PlannerConfig& cfg, std::vector<double>* each = nullptr);
 
 JobReport report(const Job& job, const mc::host::StreamResult& r, double ts_s);
 

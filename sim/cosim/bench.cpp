@@ -94,7 +94,8 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
   for (const Scenario& s : bench_scenarios(o.quick))
     if (o.scenarios.empty() || std::count(o.scenarios.begin(), o.scenarios.end(), s.name))
       scenarios.push_back(s);
-  for (const std::string& n : o.scenarios) find_scenario(n, o.quick);
+  for (const std::string& n : o.scenarios)
+    if (n != "job") find_scenario(n, o.quick);
   for (const Scenario& s : scenarios)
     for (GainPolicy g : o.policies)
       for (const Platform& p : platforms) {
@@ -111,6 +112,31 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
         r.record_dt_s = 1e-5;
         specs.push_back(std::move(r));
       }
+  // The job: tuned gains (each platform's own), without and with the
+  // feed-forward, planned once.
+  std::string job;
+  if (o.scenarios.empty() || std::count(o.scenarios.begin(), o.scenarios.end(), "job")) {
+    const Scenario js = bench_job(o.machine, o.job_file, o.quick);
+    job = js.describe();
+    const std::vector<std::string>& names = o.platforms.empty() ? o.job_platforms : o.platforms;
+    for (const std::string& n : names) find_platform(o.machine, n);
+    for (FeedForward f : o.job_feedforward)
+      for (const Platform& p : bench_platforms(o.machine)) {
+        if (!std::count(names.begin(), names.end(), p.name)) continue;
+        RunSpec r;
+        r.machine = o.machine;
+        r.platform = p;
+        r.scenario = js;
+        r.policy = GainPolicy::Tuned;
+        r.feedforward = f;
+        r.engine = o.engine;
+        r.seed = o.seed;
+        r.jitter = o.jitter;
+        // Every 100 us: 2 um of travel at the profile's 1200 mm/min.
+        r.record_dt_s = 1e-4;
+        specs.push_back(std::move(r));
+      }
+  }
   // The RTL check: the same specs on the Verilated core, in the same pool.
   std::vector<size_t> checked;
   if (o.rtl_check && o.engine == Engine::Twin)
@@ -128,6 +154,7 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
   std::vector<RunResult> all = run_pool(specs, o.jobs, status);
 
   BenchResult res;
+  res.job = job;
   res.runs.assign(std::make_move_iterator(all.begin()), std::make_move_iterator(all.begin() + long(n_table)));
   for (size_t k = 0; k < checked.size(); ++k) {
     RtlCheck c;
@@ -264,7 +291,14 @@ std::string ms(double s) {
   return std::isnan(s) ? "not settled" : fmt(s * 1e3, 2);
 }
 std::string tag(const RunResult& r) {
-  return r.platform + "_" + r.scenario + "_" + r.policy;
+  return r.platform + "_" + r.scenario + "_" + r.policy + (r.scenario == "job" ? "_ff-" + r.feedforward : "");
+}
+// The feed-forward terms a run applied (the fitted policy drops those the
+// core cannot apply at its Ts).
+std::string ff_applied(const RunResult& r) {
+  if (r.gains.ff1 != 0 && r.gains.ff2 != 0) return "vel+acc";
+  if (r.gains.ff1 != 0) return "vel";
+  return r.gains.ff2 != 0 ? "acc" : "none";
 }
 
 void write_file(const fs::path& p, const std::string& text) {
@@ -298,7 +332,10 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   std::ostringstream csv;
   csv << "platform,scenario,policy,engine,ts_s,kp_per_count,ki_per_count_s,kd_per_count_per_s,tf_s,"
          "follow_rms_x_um,follow_max_x_um,follow_rms_y_um,follow_max_y_um,contour_rms_um,contour_max_um,"
-         "settling_time_s,overshoot_pct,rise_time_s,tracking,sim_s,wall_s,sim_speed_x_real_time\n";
+         "settling_time_s,overshoot_pct,rise_time_s,tracking,sim_s,wall_s,sim_speed_x_real_time,"
+         "feedforward,ff1_per_count_per_s,ff2_per_count_per_s2,contour_rms_counts,contour_max_counts,"
+         "encoder_contour_rms_counts,encoder_contour_max_counts,queue_ran_dry\n";
+  const double cpm = counts_per_m(o.machine.axes[0]);
   for (const RunResult& r : br.runs) {
     const bool step = r.scenario == "step";
     csv << r.platform << ',' << r.scenario << ',' << r.policy << ',' << r.engine << ',' << r.gains.ts << ','
@@ -310,7 +347,17 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     else
       csv << r.contour.rms * 1e6 << ',' << r.contour.max * 1e6 << ",,,";
     csv << ',' << (r.tracking ? 1 : 0) << ',' << r.sim_s << ',' << r.wall_s << ',' << r.sim_s / r.wall_s
-        << '\n';
+        << ',' << r.feedforward << ',' << r.gains.ff1 << ',' << r.gains.ff2 << ',';
+    if (!step)
+      csv << r.contour.rms * cpm << ',' << r.contour.max * cpm;
+    else
+      csv << ',';
+    csv << ',';
+    if (r.scenario == "job")
+      csv << r.measured_contour.rms * cpm << ',' << r.measured_contour.max * cpm;
+    else
+      csv << ',';
+    csv << ',' << (r.underrun ? 1 : 0) << '\n';
   }
   write_file(dir / "results.csv", csv.str());
   written.push_back((dir / "results.csv").string());
@@ -332,7 +379,8 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   for (const RunResult& r : br.runs) {
     if (!std::count(platform_order.begin(), platform_order.end(), r.platform))
       platform_order.push_back(r.platform);
-    if (!std::count(scenario_order.begin(), scenario_order.end(), r.scenario))
+    // The job has a section of its own.
+    if (r.scenario != "job" && !std::count(scenario_order.begin(), scenario_order.end(), r.scenario))
       scenario_order.push_back(r.scenario);
   }
   std::vector<std::string> all_p;
@@ -430,6 +478,63 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
         "made "
         "for a fast loop can be unstable at 10 ms.\n\n";
 
+  // The job: its own table, every platform and feed-forward.
+  std::vector<const RunResult*> jobs;
+  for (const RunResult& r : br.runs)
+    if (r.scenario == "job") jobs.push_back(&r);
+  const auto job_find = [&](const std::string& p, const std::string& ff) -> const RunResult* {
+    for (const RunResult* r : jobs)
+      if (r->platform == p && r->feedforward == ff) return r;
+    return nullptr;
+  };
+  std::vector<std::string> ff_order;
+  for (const RunResult* r : jobs)
+    if (!std::count(ff_order.begin(), ff_order.end(), r->feedforward)) ff_order.push_back(r->feedforward);
+  // The floor a loop on an encoder cannot go below: a position known to a
+  // count, uniformly within it, is 1/sqrt(12) count RMS off.
+  const double floor_counts = 1 / std::sqrt(12.0);
+  const auto counts = [&](double m) { return fmt(m * cpm, 3); };
+  if (!jobs.empty()) {
+    md << "## job, tuned gains, without and with feed-forward\n\n`job`: " << br.job
+       << ".\n\nThe planner of `motionctl run` made the segments; the co-simulation streams them into the "
+          "core's queue as room frees, by its level, as the host does over the link (the PC loop's "
+          "command generator takes them the same way). Contour error: host/machine/job's measure (the "
+          "distance of the table's true XY position from the programmed path, samples whose command is "
+          "on a rapid left out); encoder: the same of the encoder counts, as `motionctl run` reports it. "
+          "Feed-forward `fitted`: FF1 = 1/Kg and FF2 = tau/Kg from the axis model, each where a one-count "
+          "pulse of it fits the output (FF1/Ts <= out_limit, FF2/Ts^2 <= out_limit/8); the column says "
+          "what was applied. One count = "
+       << fmt(1e6 / cpm, 2) << " um; the quantization floor is 1/sqrt(12) = " << fmt(floor_counts, 3)
+       << " count RMS.\n\n"
+       << "| platform | Ts | feed-forward | RMS contour (um) | RMS contour (counts) | max contour (um) | max "
+          "contour (counts) | RMS follow x (um) | RMS follow y (um) | max follow (um) | encoder RMS contour "
+          "(counts) | queue ran dry | tracking |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const std::string& ff : ff_order)
+      for (const std::string& p : platform_order) {
+        const RunResult* r = job_find(p, ff);
+        if (!r) continue;
+        md << "| " << p << " | " << fmt(r->gains.ts * 1e6, 2) << " us | " << ff_applied(*r) << " | "
+           << um(r->contour.rms) << " | " << counts(r->contour.rms) << " | " << um(r->contour.max) << " | "
+           << counts(r->contour.max) << " | " << um(r->follow[0].rms) << " | " << um(r->follow[1].rms)
+           << " | " << um(std::max(r->follow[0].max, r->follow[1].max)) << " | "
+           << counts(r->measured_contour.rms) << " | " << (r->underrun ? "**yes**" : "no") << " | "
+           << (r->tracking ? "yes" : "**no**") << " |\n";
+      }
+    md << "\n";
+    // The headline: each FPGA Ts without and with, against the floor.
+    std::string reading;
+    for (const std::string& p : platform_order) {
+      const RunResult *off = job_find(p, "none"), *on = job_find(p, "fitted");
+      if (p.rfind("fpga", 0) != 0 || !off || !on) continue;
+      reading += std::string(reading.empty() ? "" : "; ") + p + ": " + counts(off->contour.rms) + " -> " +
+                 counts(on->contour.rms) + " count (" + ff_applied(*on) + ", " +
+                 fmt(on->contour.rms * cpm / floor_counts, 2) + "x the floor)";
+    }
+    if (!reading.empty())
+      md << "Reading, RMS contour error without -> with feed-forward: " << reading
+         << ". The quantization floor is " << fmt(floor_counts, 3) << " count.\n\n";
+  }
+
   // The README's table (scripts/bench_readme.sh copies it there): the circle
   // under the tuned gains, every platform.
   if (std::count(scenario_order.begin(), scenario_order.end(), "circle") &&
@@ -451,11 +556,29 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
       }
     size_t same = 0;
     for (const RtlCheck& c : br.rtl_checks) same += c.same_outputs;
-    md << "<!-- README table -->\n"
-       << head << "\n"
-       << rule << "\n"
-       << row << "\n\n"
-       << "The full benchmark took " << fmt(br.wall_s, 1) << " s with " << o.jobs << " jobs; its FPGA runs "
+    md << "<!-- README table -->\n" << head << "\n" << rule << "\n" << row << "\n\n";
+    if (!jobs.empty()) {
+      // The job: RMS contour error in counts, a row per feed-forward.
+      std::string jhead = "| job, RMS contour error |", jrule = "|---|";
+      std::vector<std::string> jp;
+      for (const std::string& p : platform_order)
+        if (job_find(p, ff_order.front())) {
+          jp.push_back(p);
+          jhead += " " + p + " |";
+          jrule += "---|";
+        }
+      md << jhead << "\n" << jrule << "\n";
+      for (const std::string& ff : ff_order) {
+        md << "| feed-forward " << ff << " |";
+        for (const std::string& p : jp) {
+          const RunResult* r = job_find(p, ff);
+          md << " " << (r ? um(r->contour.rms) + " µm = " + counts(r->contour.rms) + " count" : "") << " |";
+        }
+        md << "\n";
+      }
+      md << "\n";
+    }
+    md << "The full benchmark took " << fmt(br.wall_s, 1) << " s with " << o.jobs << " jobs; its FPGA runs "
        << "went at " << fmt(twin_wall > 0 ? twin_sim / twin_wall : 0, 1) << "x real time on the "
        << engine_name(o.engine) << " engine (" << fmt(twin_cpu > 0 ? twin_sim / twin_cpu : 0, 1)
        << "x on CPU time)";
@@ -601,7 +724,7 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     // Contour error against Ts: FPGA platforms as lines, the host as points.
     std::vector<const RunResult*> rows;
     for (const RunResult& r : br.runs)
-      if (r.scenario != "step") rows.push_back(&r);
+      if (r.scenario != "step" && r.scenario != "job") rows.push_back(&r);
     std::sort(rows.begin(), rows.end(), [](const RunResult* a, const RunResult* b) {
       return std::tie(a->policy, a->scenario, a->gains.ts) < std::tie(b->policy, b->scenario, b->gains.ts);
     });
@@ -633,6 +756,72 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
     if (!first) {
       run_gnuplot(dir / "plots" / "contour_vs_ts.gp");
       written.push_back(png.string());
+    }
+  }
+  if (!jobs.empty()) {
+    // The job's RMS contour error against Ts, in counts, with the floor.
+    std::vector<const RunResult*> rows = jobs;
+    std::sort(rows.begin(), rows.end(), [](const RunResult* a, const RunResult* b) {
+      return std::tie(a->feedforward, a->gains.ts) < std::tie(b->feedforward, b->gains.ts);
+    });
+    std::ostringstream d;
+    d << "# feedforward platform ts_s rms_counts max_counts host\n";
+    for (const RunResult* r : rows)
+      d << r->feedforward << ' ' << r->platform << ' ' << r->gains.ts << ' ' << r->contour.rms * cpm << ' '
+        << r->contour.max * cpm << ' ' << (r->platform.rfind("host", 0) == 0 ? 1 : 0) << '\n';
+    const fs::path data = dir / "data" / "job_contour_vs_ts.dat";
+    write_file(data, d.str());
+    const fs::path png = dir / "plots" / "job_contour_vs_ts.png";
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 1000,600\nset output '" << png.string() << "'\nset logscale xy\n"
+       << "set title 'Job: RMS contour error against sample period, tuned gains'\nset xlabel 'Ts (s)'\n"
+       << "set ylabel 'RMS contour error (encoder counts)'\nset grid\nset key outside right\nf = '"
+       << data.string() << "'\nplot " << floor_counts
+       << " with lines dt 2 lc rgb 'gray' title 'quantization floor "
+       << "1/sqrt(12)'";
+    for (const std::string& ff : ff_order) {
+      const std::string sel = "(strcol(1) eq '" + ff + "'";
+      gp << ", f using " << sel << " && $6 == 0 ? $3 : NaN):4 with linespoints title 'FPGA, feed-forward "
+         << ff << "', f using " << sel
+         << " && $6 == 1 ? $3 : NaN):4 with points pt 7 ps 2 title 'host, feed-forward " << ff << "'";
+    }
+    gp << "\n";
+    write_file(dir / "plots" / "job_contour_vs_ts.gp", gp.str());
+    run_gnuplot(dir / "plots" / "job_contour_vs_ts.gp");
+    written.push_back(png.string());
+
+    // Along the path: the contour error against time at the shortest FPGA
+    // Ts and at 1 ms, without and with.
+    std::vector<const RunResult*> shown;
+    std::string shortest;
+    for (const std::string& p : platform_order)
+      if (p.rfind("fpga", 0) == 0 && job_find(p, ff_order.front())) shortest = p;
+    for (const std::string& p : {std::string("fpga-1ms"), shortest})
+      for (const std::string& ff : ff_order)
+        if (const RunResult* r = job_find(p, ff); r && !std::count(shown.begin(), shown.end(), r))
+          shown.push_back(r);
+    if (!shown.empty()) {
+      const fs::path path_png = dir / "plots" / "job_contour_path.png";
+      std::ostringstream pg;
+      pg << "set terminal pngcairo size 1200,600\nset output '" << path_png.string() << "'\n"
+         << "set title 'Job: contour error along the path (rapids left out), tuned gains'\n"
+         << "set xlabel 'time (s)'\nset ylabel 'contour error (um)'\nset grid\nset key outside right\nplot ";
+      for (size_t k = 0; k < shown.size(); ++k) {
+        const RunResult& r = *shown[k];
+        std::ostringstream e;
+        e << "# t_s contour_um (NaN: the command on a rapid)\n";
+        for (size_t i = 0; i < r.contour_each.size(); ++i)
+          e << r.t[i] << ' '
+            << (std::isnan(r.contour_each[i]) ? std::string("NaN") : fmt(r.contour_each[i] * 1e6, 4)) << '\n';
+        const fs::path f = dir / "data" / ("job_contour_" + tag(r) + ".dat");
+        write_file(f, e.str());
+        pg << (k ? ", " : "") << "'" << f.string() << "' using 1:2 with lines title '" << r.platform
+           << ", feed-forward " << ff_applied(r) << "'";
+      }
+      pg << "\n";
+      write_file(dir / "plots" / "job_contour_path.gp", pg.str());
+      run_gnuplot(dir / "plots" / "job_contour_path.gp");
+      written.push_back(path_png.string());
     }
   }
   return written;

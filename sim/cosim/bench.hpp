@@ -1,6 +1,9 @@
 // The sample-period benchmark (`motionctl bench`, `make bench`): every
-// platform x scenario x gain policy co-simulated (sim/cosim.hpp), several
-// at once in child processes, then results.csv, report.md and PNG plots.
+// platform x scenario x gain policy co-simulated (sim/cosim.hpp), and the
+// G-code job scenario (examples/profile.nc as `motionctl run` plans it) on
+// the job platforms with tuned gains, without and with the core's
+// feed-forward; several runs at once in child processes, then results.csv,
+// report.md and PNG plots.
 #pragma once
 
 #include <array>
@@ -23,7 +26,15 @@ struct BenchOptions {
   bool rtl_check = true;
   int jobs = 2;
   uint64_t seed = 1;
-  std::vector<std::string> platforms, scenarios;  // empty: all
+  std::vector<std::string> platforms, scenarios;  // empty: all ("job" is the job scenario's name)
+  // The job scenario: this G-code file (empty: the built-in
+  // examples/profile.nc), on these platforms unless `platforms` names some.
+  // The job runs for its planned time (11.7 s for the profile), so by
+  // default it skips the two shortest Ts, which cost 3-5 times as much and
+  // give what 100 us gives (docs/cosim.md).
+  std::string job_file;
+  std::vector<std::string> job_platforms{"host-10ms", "fpga-10ms", "fpga-1ms", "fpga-100us"};
+  std::vector<FeedForward> job_feedforward{FeedForward::None, FeedForward::Fitted};
   std::vector<GainPolicy> policies{GainPolicy::Same, GainPolicy::Tuned};
   bool plots = true;
   bool probe_kernel = true;  // also measure the SystemC clocked-module alternative
@@ -55,6 +66,7 @@ struct SpeedRow {
 
 struct BenchResult {
   std::vector<RunResult> runs;
+  std::string job;  // the job scenario's description, empty without it
   std::vector<RtlCheck> rtl_checks;
   std::vector<SpeedRow> other_speeds;
   KernelProbe probe;

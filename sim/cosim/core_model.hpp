@@ -31,8 +31,9 @@ class CoreModel {
  public:
   virtual ~CoreModel() = default;
   // This clock's outputs (before its edge) for these inputs, then the edge.
-  // The RTL fills those the co-simulation reads: pid_wready, tick, done and,
-  // per axis, pwm, dir, drv_en, drv_u, drv_cmd and cmd.
+  // The RTL fills those the co-simulation reads: pid_wready, seg_count,
+  // ip_underrun, tick, done and, per axis, pwm, dir, drv_en, drv_u, drv_cmd
+  // and cmd.
   virtual CoreOut cycle(const CoreIn& in) = 0;
   // n clocks with `in` held, at once, when that changes nothing but counters;
   // nullopt (and nothing done) otherwise. The RTL never skips.

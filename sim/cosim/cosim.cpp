@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -88,6 +89,13 @@ std::string Scenario::describe() const {
       s << "XY circle of radius " << size_m * 1e3 << " mm (stairs interpolator), " << feed_m_s * 1e3
         << " mm/s";
       break;
+    case ScenarioKind::Job:
+      s.precision(4);
+      s << "G-code job " << job->file << ": " << job->summary.moves << " moves (" << job->summary.arcs
+        << " arcs), " << job->summary.length_mm << " mm cutting, " << job->pieces.size()
+        << " segments streamed by the queue's level, " << job->summary.time_s << " s planned, " << duration_s
+        << " s simulated";
+      return s.str();
   }
   s << ", " << duration_s << " s";
   return s.str();
@@ -97,10 +105,50 @@ std::vector<Scenario> bench_scenarios(bool quick) {
   const double settle = quick ? 0.05 : 0.2;
   const double feed = 0.025;  // 1500 mm/min: a small router's cutting feed
   const double line = quick ? 0.002 : 0.02, radius = quick ? 0.0005 : 0.005;
-  return {{"step", ScenarioKind::Step, 0.001, 0, 0, quick ? 0.05 : 0.3},
-          {"line-45", ScenarioKind::Line, line, 45, feed, line / feed + settle},
-          {"line-30", ScenarioKind::Line, line, 30, feed, line / feed + settle},
-          {"circle", ScenarioKind::Circle, radius, 0, feed, 2 * M_PI * radius / feed + settle}};
+  return {{"step", ScenarioKind::Step, 0.001, 0, 0, quick ? 0.05 : 0.3, nullptr},
+          {"line-45", ScenarioKind::Line, line, 45, feed, line / feed + settle, nullptr},
+          {"line-30", ScenarioKind::Line, line, 30, feed, line / feed + settle, nullptr},
+          {"circle", ScenarioKind::Circle, radius, 0, feed, 2 * M_PI * radius / feed + settle, nullptr}};
+}
+
+std::string_view quick_job_program() {
+  // A line, a quarter circle and a line at a cutting feed: ramps, a corner
+  // and an arc in a quarter of a second.
+  return "G21 G90 G17 G94\nG1 X2 F1200\nG3 X3 Y1 I0 J1\nG1 Y2\nM2\n";
+}
+
+Scenario job_scenario(const MachineConfig& m, std::string_view program, const std::string& source,
+                      double settle_s) {
+  auto job = std::make_shared<mc::machine::Job>(mc::machine::plan_program(program, source, m, {0, 0, 0}));
+  double lo[2] = {0, 0}, hi[2] = {0, 0};
+  for (const mc::host::Move& mv : job->moves) {
+    if (mv.kind == mc::host::Move::Kind::arc && mv.plane != mc::gcode::Plane::xy)
+      throw InputError(source + ":" + std::to_string(mv.line) + ": arc", "outside the XY plane",
+                       "arcs in the XY plane (G17)", "the co-simulation's table has X and Y only");
+    if (!mv.is_motion()) continue;
+    for (int a = 0; a < 2; ++a) {
+      lo[a] = std::min({lo[a], mv.start[size_t(a)], mv.end[size_t(a)]});
+      hi[a] = std::max({hi[a], mv.start[size_t(a)], mv.end[size_t(a)]});
+    }
+  }
+  Scenario s;
+  s.name = "job";
+  s.kind = ScenarioKind::Job;
+  s.size_m = std::max(1e-3, std::hypot(hi[0] - lo[0], hi[1] - lo[1]) * 1e-3);
+  s.duration_s = job->summary.time_s + settle_s;
+  s.job = std::move(job);
+  return s;
+}
+
+Scenario bench_job(const MachineConfig& m, const std::string& path, bool quick) {
+  if (path.empty())
+    return quick ? job_scenario(m, quick_job_program(), "quick job", 0.05)
+                 : job_scenario(m, profile_program(), "examples/profile.nc");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("--job", "'" + path + "'", "a readable G-code file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return job_scenario(m, text.str(), path, quick ? 0.05 : 0.1);
 }
 
 Scenario find_scenario(const std::string& name, bool quick) {
@@ -126,10 +174,53 @@ double loop_delay_s(const MachineConfig& m, const Platform& p, const JitterHisto
   return 0.5 * p.ts_s + m.host_io_latency_s + (n > 0 ? mean / n : 0);
 }
 
+const char* feedforward_name(FeedForward f) {
+  switch (f) {
+    case FeedForward::None:
+      return "none";
+    case FeedForward::Velocity:
+      return "vel";
+    case FeedForward::Full:
+      return "vel+acc";
+    case FeedForward::Fitted:
+      break;
+  }
+  return "fitted";
+}
+
+FeedForward parse_feedforward(const std::string& name) {
+  for (FeedForward f : {FeedForward::None, FeedForward::Velocity, FeedForward::Full, FeedForward::Fitted})
+    if (name == feedforward_name(f)) return f;
+  throw InputError("--feedforward", "'" + name + "'", "none, vel, vel+acc or fitted");
+}
+
+void add_model_feedforward(mc::host::PidGains& g, const AxisConfig& a, FeedForward f) {
+  if (f == FeedForward::None) return;
+  const AxisModel model = axis_model(a);
+  const double ff1 = 1 / model.kg, ff2 = model.tau / model.kg;
+  const double full = a.pid.out_limit;
+  if (f == FeedForward::Fitted) {
+    // The core's terms act on the whole-count command: a step of one count
+    // in a sample is FF1/Ts of drive for that sample, and its second
+    // difference a doublet of FF2/Ts^2 each way. A term whose one-count
+    // pulse saturates the output loses its mean (a doublet's useful part
+    // is the small imbalance between its halves), so it is left out.
+    g.ff1 = ff1 / g.ts <= full ? ff1 : 0;
+    g.ff2 = ff2 / (g.ts * g.ts) <= full / 8 ? ff2 : 0;
+    return;
+  }
+  g.ff1 = ff1;
+  g.ff2 = f == FeedForward::Full ? ff2 : 0;
+}
+
 mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const Platform& p,
-                             GainPolicy policy, const JitterHistogram& jitter) {
+                             GainPolicy policy, const JitterHistogram& jitter, FeedForward feedforward) {
   const double ts = p.host ? p.ts_s : ts_cycles(m, p.ts_s) / m.clock_hz;
-  if (policy == GainPolicy::Tuned) return tuned_gains(a, ts, loop_delay_s(m, p, jitter));
+  if (policy == GainPolicy::Tuned) {
+    mc::host::PidGains g = tuned_gains(a, ts, loop_delay_s(m, p, jitter));
+    add_model_feedforward(g, a, feedforward);
+    return g;
+  }
   mc::host::PidGains g{};
   g.kp = a.pid.kp;
   g.ki = a.pid.ki;
@@ -138,6 +229,7 @@ mc::host::PidGains gains_for(const MachineConfig& m, const AxisConfig& a, const 
   g.ts = ts;
   g.ff1 = a.pid.ff1;
   g.ff2 = a.pid.ff2;
+  add_model_feedforward(g, a, feedforward);
   return g;
 }
 
@@ -148,8 +240,11 @@ namespace {
 struct Command {
   bool set = false;  // a step: load the position at the start
   int32_t set_pos[3] = {};
-  std::vector<uint32_t> words;   // segments to queue at the start
+  std::vector<uint32_t> words;   // segments to stream from the start
   std::vector<PathPiece> ideal;  // metres, for the contour error
+  // Job: the moves with Z dropped (the table is XY; Z's moves keep their
+  // time in the words), for host/machine/job's contour error.
+  std::vector<mc::host::Move> xy_moves;
 };
 
 Command make_command(const MachineConfig& m, const Scenario& s) {
@@ -161,6 +256,14 @@ Command make_command(const MachineConfig& m, const Scenario& s) {
   Command c;
   const mc::host::Vec3 origin{0, 0, 0};
   const double feed = s.feed_m_s * cpm;
+  if (s.kind == ScenarioKind::Job) {
+    for (const mc::host::Piece& p : s.job->pieces)
+      if (!p.action)  // a stop: the planner already brought the machine to rest
+        for (uint32_t w : seg::pack(p.seg.seg)) c.words.push_back(w);
+    c.xy_moves = s.job->moves;
+    for (mc::host::Move& mv : c.xy_moves) mv.start[2] = mv.end[2] = mv.centre[2] = 0;
+    return c;
+  }
   if (s.kind == ScenarioKind::Step) {
     c.set = true;
     c.set_pos[0] = int32_t(std::llround(s.size_m * cpm));
@@ -182,6 +285,42 @@ Command make_command(const MachineConfig& m, const Scenario& s) {
   return c;
 }
 
+// The host's side of the core's segment queue, as over the link: whole
+// segments, a word a clock, whenever the queue has room for one by the
+// level the core showed, and never more than `window` words queued. The
+// level a clock shows is the one before its edge (the word written in that
+// clock is not in it yet, a word loaded at that edge still is), so the
+// room is never overestimated and no segment is ever dropped. Every engine
+// sees the same levels clock by clock (a skipped stretch changes no level),
+// hence writes at the same clocks.
+class SegmentFeed {
+ public:
+  SegmentFeed(const std::vector<uint32_t>& words, int window) : words_(words), window_(window) {
+    if (window_ < seg::SEG_WORDS || words_.size() % seg::SEG_WORDS != 0)
+      throw std::logic_error("segment feed: a window of at least one segment, whole segments");
+  }
+  // A word goes in this clock: the rest of a segment, or a new one with room.
+  bool due() const {
+    return at_ < words_.size() &&
+           (at_ % seg::SEG_WORDS != 0 || level_ + int(wrote_) + seg::SEG_WORDS <= window_);
+  }
+  uint32_t word() const { return words_[at_]; }
+  // After a clock (or a skipped stretch): the level it showed, and whether
+  // a word went in.
+  void clocked(int level, bool wrote) {
+    level_ = level;
+    wrote_ = wrote;
+    at_ += wrote ? 1 : 0;
+  }
+
+ private:
+  const std::vector<uint32_t>& words_;
+  int window_;
+  size_t at_ = 0;
+  int level_ = 0;
+  bool wrote_ = false;
+};
+
 // The drive is the PWM pin itself rather than its average.
 bool switching(const DriveConfig& d) {
   return d.kind == DriveConfig::Kind::Pwm && d.pwm_switching;
@@ -193,13 +332,18 @@ bool switching(const DriveConfig& d) {
 class Machine {
  public:
   explicit Machine(const RunSpec& spec)
-      : s_(spec), k_(clocks_per_step(spec.machine)), cmd_(make_command(spec.machine, spec.scenario)) {
+      : s_(spec),
+        k_(clocks_per_step(spec.machine)),
+        cmd_(make_command(spec.machine, spec.scenario)),
+        // Whole segments: a window of the FIFO's depth holds 51 of 10 words.
+        feed_(cmd_.words, spec.queue_words > 0 ? spec.queue_words
+                                               : mc::InterpCore<>::DEPTH / seg::SEG_WORDS * seg::SEG_WORDS) {
     const MachineConfig& m = s_.machine;
     if (m.axes.size() < 2)
       throw InputError("axes (" + m.source + ")", std::to_string(m.axes.size()), "at least x and y");
     for (int a = 0; a < kCoreAxes; ++a) {
       plant_.emplace_back(m.axes[size_t(a)], m.plant_dt_s);
-      gains_[a] = gains_for(m, m.axes[size_t(a)], s_.platform, s_.policy, s_.jitter);
+      gains_[a] = gains_for(m, m.axes[size_t(a)], s_.platform, s_.policy, s_.jitter, s_.feedforward);
     }
     start_step_ = uint64_t(std::llround(1e-3 / m.plant_dt_s));  // the command starts at 1 ms
     end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
@@ -225,6 +369,7 @@ class Machine {
     res_.platform = s_.platform.name;
     res_.scenario = s_.scenario.name;
     res_.policy = policy_name(s_.policy);
+    res_.feedforward = feedforward_name(s_.feedforward);
     res_.engine = s_.platform.host ? "host" : engine_name(s_.engine);
     res_.gains = gains_[0];
   }
@@ -237,6 +382,7 @@ class Machine {
   uint64_t next_wake_step() const { return uint64_t(std::ceil(host_[0].next_wake_s() / dt() - 1e-9)); }
   // The PC wakes: it reads the command and the encoders as they are now.
   void host_wake() {
+    generator_to(step_ * k_);
     for (int a = 0; a < kCoreAxes; ++a) {
       host_[size_t(a)].wake(double(cmd_now_[a]), double(plant_[size_t(a)].encoder_count()));
       if (step_ >= start_step_) {
@@ -259,6 +405,8 @@ class Machine {
     const Scenario& sc = s_.scenario;
     if (sc.kind == ScenarioKind::Step) {
       res_.step = mc::host::step_metrics(res_.t, res_.pos_m[0], 0, sc.size_m, res_.t.front());
+    } else if (sc.kind == ScenarioKind::Job) {
+      job_contour();
     } else {
       std::vector<Point2> pts(res_.t.size());
       for (size_t i = 0; i < pts.size(); ++i) pts[i] = {res_.pos_m[0][i], res_.pos_m[1][i]};
@@ -271,10 +419,38 @@ class Machine {
       for (int a = 0; a < kCoreAxes; ++a)
         worst = std::max(worst, std::fabs(res_.cmd_m[size_t(a)][i] - res_.pos_m[size_t(a)][i]));
     res_.tracking = worst < 0.25 * sc.size_m;
+    if (host()) res_.underrun = gen_.underrun();
     return std::move(res_);
   }
 
  private:
+  // The job's contour error by host/machine/job's measure, in metres: of the
+  // true table position, and of the encoder counts the board would report.
+  void job_contour() {
+    const mc::machine::Job& j = *s_.scenario.job;
+    const double cpm = counts_per_m(s_.machine.axes[0]);
+    const size_t n = res_.t.size();
+    std::vector<std::array<int32_t, 3>> cmd(n);
+    std::vector<mc::host::Vec3d> pos(n), enc(n);
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t a = 0; a < size_t(kCoreAxes); ++a) {
+        cmd[i][a] = int32_t(std::llround(res_.cmd_m[a][i] * cpm));
+        pos[i][a] = res_.pos_m[a][i] * 1e3;
+        enc[i][a] = double(enc_[a][i]) / cpm * 1e3;
+      }
+      cmd[i][2] = 0;
+      pos[i][2] = enc[i][2] = 0;
+    }
+    const auto metres = [](ErrorStats e) {
+      e.rms *= 1e-3;
+      e.max *= 1e-3;
+      return e;
+    };
+    res_.contour = metres(mc::machine::contour_error(cmd, pos, cmd_.xy_moves, j.cfg, &res_.contour_each));
+    for (double& d : res_.contour_each) d *= 1e-3;
+    res_.measured_contour = metres(mc::machine::contour_error(cmd, enc, cmd_.xy_moves, j.cfg));
+  }
+
   // Reset, gains, Ts, enables: through the core's own ports, clock by clock.
   void configure_core() {
     CoreIn in;
@@ -317,7 +493,7 @@ class Machine {
   // (Cosim.TwinAndRtlGiveIdenticalOutputs). It stops after the step in
   // which an encoder count changes: that edge is shown clock by clock.
   bool jump(uint64_t target) {
-    if (host() || s_.engine != Engine::Twin || step_ == start_step_ || pending_) return false;
+    if (host() || s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
     for (int a = 0; a < kCoreAxes; ++a)
       if (plant_[size_t(a)].encoder_count() != shown_[a]) return false;
     uint64_t steps = target - step_;
@@ -349,8 +525,9 @@ class Machine {
       if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
       for (int a = 0; a < kCoreAxes; ++a) edge = edge || plant_[size_t(a)].encoder_count() != shown_[a];
     }
-    if (!core_->try_skip(in_, uint32_t(j * k_)))
-      throw std::logic_error("co-simulation: a quiet stretch was not");
+    const auto sk = core_->try_skip(in_, uint32_t(j * k_));
+    if (!sk) throw std::logic_error("co-simulation: a quiet stretch was not");
+    if (step_ > start_step_) feed_.clocked(sk->first.seg_count, false);
     res_.clocks_skipped += j * k_;
     return true;
   }
@@ -383,7 +560,6 @@ class Machine {
     double volts[kCoreAxes];
     if (host()) {
       const double t = double(step_) * dt();
-      command_generator_step();
       for (int a = 0; a < kCoreAxes; ++a)
         volts[a] = drive_volts(dac_[a], int32_t(std::lround(host_[size_t(a)].output_at(t))));
     } else {
@@ -394,14 +570,16 @@ class Machine {
     if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
   }
 
-  void start_command(CoreIn& in, uint32_t c) {
-    if (step_ != start_step_) return;
-    in.ip_set = cmd_.set && c == 0 ? 7 : 0;
+  // A word is due for the core's queue in this clock (from the start on).
+  bool feeding() const { return step_ >= start_step_ && feed_.due(); }
+  // The command's inputs for clock c of this step: a step's position at the
+  // start, then the segment words as the queue takes them.
+  void command_inputs(CoreIn& in, uint32_t c) const {
+    in.ip_set = step_ == start_step_ && cmd_.set && c == 0 ? 7 : 0;
     for (int a = 0; a < 3; ++a) in.ip_set_pos[a] = cmd_.set_pos[a];
-    in.seg_wr = c < cmd_.words.size();
-    in.seg_wdata = in.seg_wr ? cmd_.words[c] : 0;
+    in.seg_wr = feeding();
+    in.seg_wdata = in.seg_wr ? feed_.word() : 0;
   }
-  bool commanding(uint32_t c) const { return step_ == start_step_ && (c == 0 || c < cmd_.words.size()); }
 
   void fpga_step(double* volts) {
     emit_plan();
@@ -416,17 +594,23 @@ class Machine {
         in_.enc_b[a] = p.b;
         in_.enc_z[a] = p.z;
       }
-      start_command(in_, c);
-      if (c >= settle && !pending_ && !commanding(c)) {
+      command_inputs(in_, c);
+      // The step's position goes in clock 0 of the start; its first clock is
+      // never skipped (the existing runs' schedule).
+      const bool commanding = in_.ip_set != 0 || in_.seg_wr || (step_ == start_step_ && c == 0);
+      if (c >= settle && !pending_ && !commanding) {
         const uint32_t n = k_ - c;
         if (const auto sk = core_->try_skip(in_, n)) {
           for (int a = 0; a < kCoreAxes; ++a) sum[a] += skipped_volts(a, sk->first, sk->pwm0, n);
           res_.clocks_skipped += n;
+          if (step_ >= start_step_) feed_.clocked(sk->first.seg_count, false);
           break;
         }
       }
       const CoreOut o = core_->cycle(in_);
       ++res_.clocks_cycled;
+      if (step_ >= start_step_) feed_.clocked(o.seg_count, in_.seg_wr);
+      res_.underrun = res_.underrun || o.ip_underrun;
       for (int a = 0; a < kCoreAxes; ++a) {
         sum[a] += clock_volts(a, o);
         cmd_now_[a] = o.cmd[a];
@@ -475,43 +659,64 @@ class Machine {
   }
 
   // The PC's command: the same interpolator, run on its own, so both
-  // platforms follow the very same position command.
-  void command_generator_step() {
-    for (uint32_t c = 0; c < k_; ++c) {
+  // platforms follow the very same position command, its segments streamed
+  // into its queue as into the core's. It runs open loop, so it is brought
+  // up to a clock only when the command is read (a wake, a record): the
+  // stretches between its iterations then go by at once (run_quiet).
+  void generator_to(uint64_t clock) {
+    const uint64_t start = start_step_ * k_;
+    while (gen_clock_ < clock) {
+      const bool started = gen_clock_ >= start;
       mc::InterpIn in;
-      if (step_ == start_step_) {
-        in.set = cmd_.set && c == 0 ? 7 : 0;
-        for (int a = 0; a < 3; ++a) in.set_pos[a] = cmd_.set_pos[a];
-        in.wr = c < cmd_.words.size();
-        in.wdata = in.wr ? cmd_.words[c] : 0;
+      in.set = gen_clock_ == start && cmd_.set ? 7 : 0;
+      for (int a = 0; a < 3; ++a) in.set_pos[a] = cmd_.set_pos[a];
+      in.wr = started && feed_.due();
+      in.wdata = in.wr ? feed_.word() : 0;
+      // Up to the start, the start, and then any clock count at once.
+      const uint64_t until = gen_clock_ < start ? start : clock;
+      if (gen_.quiet(in) && until > gen_clock_) {
+        gen_.skip(uint32_t(std::min<uint64_t>(until - gen_clock_, 2)));
+        gen_clock_ = until;
+        if (started) feed_.clocked(gen_.count(), false);
+        continue;
       }
-      if (gen_.quiet(in)) {
-        gen_.skip(k_ - c);
-        break;
+      if (const uint64_t q = std::min<uint64_t>(gen_.run_quiet(in), until - gen_clock_); q > 0) {
+        gen_.skip_run(uint32_t(q));
+        gen_clock_ += q;
+        if (started) feed_.clocked(gen_.count(), false);
+        continue;
       }
+      const int level = gen_.count();
       gen_.clock(in);
+      ++gen_clock_;
+      if (started) feed_.clocked(level, in.wr);
     }
     for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = gen_.pos(a);
   }
 
   void record() {
+    if (host()) generator_to(step_ * k_);
     const double cpm = counts_per_m(s_.machine.axes[0]);
     res_.t.push_back(double(step_ - start_step_) * dt());
     for (int a = 0; a < kCoreAxes; ++a) {
       res_.cmd_m[size_t(a)].push_back(double(cmd_now_[a]) / cpm);
       res_.pos_m[size_t(a)].push_back(plant_[size_t(a)].position_m());
+      if (s_.scenario.kind == ScenarioKind::Job) enc_[size_t(a)].push_back(plant_[size_t(a)].encoder_count());
     }
   }
 
   const RunSpec& s_;
   const uint32_t k_;
   Command cmd_;
+  SegmentFeed feed_;
+  std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
   std::vector<AxisPlant> plant_;
   mc::host::PidGains gains_[kCoreAxes];
   std::vector<HostLoop> host_;
   DriveConfig dac_[kCoreAxes]{};
   std::unique_ptr<CoreModel> core_;
   mc::InterpCore<9> gen_;
+  uint64_t gen_clock_ = 0;  // clocks gen_ has run
   CoreIn in_;
   uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1;
   int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
@@ -636,6 +841,7 @@ void fields(IO& io, R& r) {
   io.str(r.scenario);
   io.str(r.policy);
   io.str(r.engine);
+  io.str(r.feedforward);
   io.pod(r.gains);
   io.vec(r.t);
   for (int a = 0; a < 2; ++a) {
@@ -646,6 +852,9 @@ void fields(IO& io, R& r) {
   }
   io.vec(r.sample_clock);
   io.pod(r.contour);
+  io.pod(r.measured_contour);
+  io.vec(r.contour_each);
+  io.pod(r.underrun);
   io.pod(r.step);
   io.pod(r.tracking);
   io.pod(r.sim_s);

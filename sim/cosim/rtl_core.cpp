@@ -41,12 +41,15 @@ bool same_but_encoders(CoreIn a, const CoreIn& b) {
   return a == b;
 }
 
-// The outputs the co-simulation reads (CoreModel::cycle), and only those:
+// The outputs the co-simulation reads (CoreModel::cycle), and only those
+// (the queue level paces the segment stream):
 // reading every port each clock costs a fifth of the model's own time.
 template <typename Model>
 CoreOut read_used(const Model& d) {
   CoreOut o;
   o.pid_wready = d.pid_wready;
+  o.seg_count = int(d.seg_count);
+  o.ip_underrun = d.ip_underrun;
   o.tick = d.tick;
   o.done = d.done;
   for (int a = 0; a < kCoreAxes; ++a) {
