@@ -14,6 +14,11 @@ target_link_libraries(test_grbl_stream PRIVATE mc_grbl)
 mc_gtest(test_grbl_server unit test_grbl_server.cpp)
 target_link_libraries(test_grbl_server PRIVATE mc_grbl)
 
+# The engine on the board backend and the virtual board in process, in board
+# time: streaming with look-ahead, hold, overrides, dwells, faults, resets.
+mc_gtest(test_grbl_board system test_grbl_board.cpp)
+target_link_libraries(test_grbl_board PRIVATE mc_grbl mc_vboard)
+
 # motionctl serve itself: errors, a live run over TCP, SIGTERM, the settings file.
 mc_gtest(test_grbl_cli unit test_grbl_cli.cpp)
 target_compile_definitions(test_grbl_cli PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
