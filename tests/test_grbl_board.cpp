@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "hls/board_regs.hpp"
+#include "host/base/errors.hpp"
 #include "host/grbl/board_backend.hpp"
 #include "host/grbl/protocol.hpp"
 #include "host/grbl/settings.hpp"
@@ -148,6 +149,7 @@ void expect_at(const Report& r, double x, double y, double z, double tol = 2 * k
 TEST(GrblBoard, StreamedJobRunsOnTimeAndEndsAtItsEndPoint) {
   BoardRig rig;
   ASSERT_NE(rig.out().find("Grbl 1.1h"), std::string::npos);
+  EXPECT_EQ(rig.status().state, "Idle");  // at power-up, whatever the servo does within its band
   std::vector<std::string> lines = {"G21 G90 G17 G94", "G1 Z-0.5 F600"};
   // 100 short lines of a zig-zag: a stop at each would take far longer than the plan.
   for (int i = 1; i <= 100; ++i)
@@ -197,6 +199,44 @@ TEST(GrblBoard, HoldStopsAlongThePathAndResumeFinishesTheJob) {
   expect_at(rig.status(), 40, 10, 0);
   EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
 }
+
+// The senders' job (tests/test_grbl_cncjs.js, --sim): arcs, a zig-zag of
+// short lines and long lines. A hold every `every` s of board time, wherever
+// it falls (a ramp, an arc, a corner), must stop and resume without a fault.
+class GrblBoardHolds : public ::testing::TestWithParam<double> {};
+
+TEST_P(GrblBoardHolds, AnywhereInAJobStopAndResumeWithoutAFault) {
+  const double every = GetParam();
+  BoardRig rig;
+  std::vector<std::string> lines = {"G21 G90 G94",       "G0 X0 Y0 Z0", "G1 X20 F2400",
+                                    "G2 X30 Y10 I0 J10", "G1 Y30",      "G3 X20 Y40 I-10 J0"};
+  for (int i = 0; i < 20; ++i)
+    lines.push_back("G1 X" + std::to_string(20 - 0.1 * (i + 1)) + " Y" + (i % 2 ? "40" : "39.5") + " F3000");
+  lines.insert(lines.end(), {"G1 X0 Y40 F4800", "G1 Y0", "G0 X12.5 Y7.5"});
+  size_t sent = 0;
+  int holds = 0;
+  double next_hold = rig.now() + every;
+  const double end = rig.now() + 30;
+  while (rig.now() < end) {
+    if (sent < lines.size() && rig.backend().ready()) rig.send(lines[sent++] + "\n");
+    rig.step();
+    if (rig.now() >= next_hold && rig.status().state == "Run") {
+      rig.send("!");
+      ASSERT_TRUE(rig.run_until_state("Hold:0", 2)) << "hold " << holds << "\n" << rig.out();
+      rig.send("~");
+      ++holds;
+      next_hold = rig.now() + every;
+    }
+    if (sent == lines.size() && rig.status().state == "Idle") break;
+  }
+  EXPECT_GE(holds, 6);
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.status().state, "Idle");
+  rig.run_for(0.2);
+  expect_at(rig.status(), 12.5, 7.5, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Phases, GrblBoardHolds, ::testing::Values(0.25, 0.33));
 
 TEST(GrblBoard, FeedOverridesChangeTheSpeedPartWay) {
   BoardRig rig;
@@ -298,6 +338,18 @@ TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {
   rig.run_for(0.2);
   expect_at(rig.status(), 10, 2, 0);
   EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
+}
+
+TEST(GrblBoard, WatchdogPeriodIsSetWithinWhatTheRegisterHolds) {
+  const machine::MachineConfig m = machine::default_machine();
+  sim::VirtualBoard board(m);
+  sim::BoardStream stream(board);
+  host::BoardLink link(stream);
+  link.connect();
+  BoardBackend b(link, m, 16, {}, 0.5);
+  EXPECT_EQ(link.read(br::WDOG), uint32_t(0.5 * m.clock_hz));
+  EXPECT_THROW(watchdog_cycles(5, m.clock_hz), host::InputError);
+  EXPECT_THROW(watchdog_cycles(1e-9, m.clock_hz), host::InputError);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "host/base/errors.hpp"
+#include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
 #include "host/cli/commands.hpp"
 #include "host/grbl/board_backend.hpp"
@@ -23,6 +24,7 @@ struct ServeOptions {
   bool dry_run = false;
   std::string settings;
   int blocks = 16;
+  std::string watchdog;  // empty: the board's
 };
 
 // The machine behind the Grbl front end and what moves it along between
@@ -56,9 +58,11 @@ Machine make_backend(const ServeOptions& o) {
     m.what = "the dry-run machine (no hardware: moves are timed, nothing drives a motor)";
     return m;
   }
+  const double wdog = o.watchdog.empty() ? 0.0 : parse_duration(o.watchdog, "--watchdog");
+  if (wdog > 0) mc::grbl::watchdog_cycles(wdog, machine().clock_hz);  // refused before the board is touched
   Machine m;
   m.board = open_board();
-  auto board = std::make_unique<mc::grbl::BoardBackend>(*m.board.link, machine(), o.blocks, note);
+  auto board = std::make_unique<mc::grbl::BoardBackend>(*m.board.link, machine(), o.blocks, note, wdog);
   mc::grbl::BoardBackend* b = board.get();
   m.tick = [b] { b->tick(); };
   m.backend = std::move(board);
@@ -103,6 +107,10 @@ void add_serve_command(CLI::App& app) {
       ->type_name("FILE");
   c->add_option("--blocks", o->blocks, "Planner blocks: lines queued ahead of the machine (default 16)")
       ->type_name("N");
+  c->add_option("--watchdog", o->watchdog,
+                "With --port/--sim: the board's watchdog period while serving, e.g. 500ms (default: the "
+                "board's, 100 ms): the drives go off this long after the last frame")
+      ->type_name("TIME");
   c->callback([o] { run_serve(*o); });
 }
 

@@ -1,6 +1,7 @@
 #include "host/grbl/board_backend.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <type_traits>
 #include <variant>
@@ -26,6 +27,8 @@ constexpr int kAlarmProbeContact = 5;
 // its command within a few counts, and senders compare MPos with the
 // program's end point to the micrometre they print.
 constexpr int64_t kInPosition = 2;
+// A servo that cannot settle (a stuck axis) must not hold a sender forever.
+constexpr std::chrono::milliseconds kSettleTimeout{500};
 
 bool limit_fault(uint32_t bits) {
   return bits & (0x7u << bb::F_LIMIT_LSB);
@@ -33,14 +36,25 @@ bool limit_fault(uint32_t bits) {
 
 }  // namespace
 
+uint32_t watchdog_cycles(double period_s, double clock_hz) {
+  const double top = double((1u << board::WDOG_W) - 1) / clock_hz;
+  const double cycles = std::round(period_s * clock_hz);
+  if (!(cycles >= 1) || period_s > top)
+    throw mc::host::InputError("watchdog period", mc::host::format_number(period_s) + " s",
+                               "0 < period <= " + mc::host::format_number(top) + " s (WDOG is " +
+                                   std::to_string(board::WDOG_W) + " bits of clock cycles)");
+  return uint32_t(cycles);
+}
+
 BoardBackend::BoardBackend(mc::host::BoardLink& l, const mc::machine::MachineConfig& m, int planner_blocks,
-                           const mc::host::Note& note)
+                           const mc::host::Note& note, double watchdog_s)
     : l_(l),
       machine_(m),
       base_(mc::machine::planner_config(m)),
       cfg_(base_),
       blocks_(planner_blocks),
       note_(note) {
+  if (watchdog_s > 0) l_.write(br::WDOG, watchdog_cycles(watchdog_s, m.clock_hz));
   const mc::machine::JobBoard b = mc::machine::ready_board(l_, machine_, note_);
   s_ = std::make_unique<JobStreamer>(l_, cfg_, b.at, m.planner.queue_ahead_s);
   s_->on_action = [this](const mc::host::Move& mv) { action(mv); };
@@ -111,7 +125,7 @@ void BoardBackend::submit(Submission line) {
 }
 
 bool BoardBackend::drained() const {
-  return !armed_ || (s_->drained() && settled_);
+  return !armed_ || (s_->drained() && !settling_);
 }
 
 void BoardBackend::feed_hold() {
@@ -130,6 +144,7 @@ void BoardBackend::jog_cancel() {
 void BoardBackend::soft_reset() {
   if (armed_) s_->abort();
   lines_.clear();
+  settling_ = false;  // reset: Idle (or an alarm) at once, as Grbl
   spindle_ = 0;
   flood_ = mist_ = false;
   read_positions();
@@ -177,7 +192,15 @@ void BoardBackend::read_positions() {
     in = in && std::llabs(int64_t(c) - cmd[k]) <= kInPosition;
   }
   const JobStreamer::State st = s_->state();
-  settled_ = !armed_ || ((st == JobStreamer::State::idle || st == JobStreamer::State::held) && in);
+  if (!armed_) {
+    settling_ = false;
+  } else if (st != JobStreamer::State::idle && st != JobStreamer::State::held) {
+    settling_ = true;
+    stopped_at_.reset();
+  } else if (settling_) {
+    if (!stopped_at_) stopped_at_ = l_.now();
+    if (in || l_.now() - *stopped_at_ > kSettleTimeout) settling_ = false;
+  }
 }
 
 void BoardBackend::action(const mc::host::Move& m) {
@@ -209,7 +232,7 @@ Status BoardBackend::status() const {
   const auto c = s_->current();
   switch (armed_ ? s_->state() : JobStreamer::State::idle) {
     case JobStreamer::State::idle:
-      s.motion = settled_ ? Motion::idle : Motion::run;
+      s.motion = settling_ ? Motion::run : Motion::idle;
       break;
     case JobStreamer::State::run:
       s.motion = c && c->jog ? Motion::jog : Motion::run;
@@ -218,7 +241,7 @@ Status BoardBackend::status() const {
       s.motion = Motion::holding;
       break;
     case JobStreamer::State::held:
-      s.motion = settled_ ? Motion::held : Motion::holding;
+      s.motion = settling_ ? Motion::holding : Motion::held;
       break;
   }
   s.position = pos_;

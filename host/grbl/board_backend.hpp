@@ -13,6 +13,7 @@
 // has no outputs for them yet); probing and homing are not run yet.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -27,13 +28,19 @@
 
 namespace mc::grbl {
 
+// The WDOG value of a watchdog period (clock cycles); InputError beyond what
+// the register holds.
+uint32_t watchdog_cycles(double period_s, double clock_hz);
+
 class BoardBackend : public Backend {
  public:
   // `l`: a connected link. Readies the board as `motionctl run` does
   // (mc::machine::ready_board: gains where missing, armed, PIDs and
-  // following-error limits on) and starts where the axes are.
+  // following-error limits on) and starts where the axes are. watchdog_s:
+  // the board's watchdog period while serving (0: leave the board's, 100 ms
+  // after its reset); InputError beyond what the register holds.
   BoardBackend(mc::host::BoardLink& l, const mc::machine::MachineConfig& m, int planner_blocks = 16,
-               const mc::host::Note& note = {});
+               const mc::host::Note& note = {}, double watchdog_s = 0);
 
   // One round of the link; throws LinkError when the board stops answering.
   void tick();
@@ -73,9 +80,11 @@ class BoardBackend : public Backend {
   std::deque<std::pair<int, int>> lines_;
   int next_key_ = 1;
   gcode::Vec3 pos_{};  // machine mm, from the encoders
-  // Stopped, and every axis within kInPosition counts of the command: a
-  // stop (Idle, Hold:0) is reported once the servo has settled there.
-  bool settled_ = true;
+  // Motion has stopped on the board but an axis is not yet within
+  // kInPosition counts of its command: a stop (Idle, Hold:0) is reported
+  // once the servo has settled there, or kSettleTimeout after it stopped.
+  bool settling_ = false;
+  std::optional<std::chrono::steady_clock::time_point> stopped_at_;
   Overrides ovr_;
   int spindle_ = 0;
   double rpm_ = 0;
