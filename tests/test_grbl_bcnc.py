@@ -33,7 +33,7 @@ if mode not in ("--dry-run", "--sim"):
 work = tempfile.mkdtemp(prefix="mc_bcnc_")
 if mode == "--sim":
     os.environ["XDG_RUNTIME_DIR"] = work  # a virtual board of our own
-END_TOLERANCE = 0.005  # mm: the servo's in-position band on --sim; exact on --dry-run
+END_TOLERANCE = 0.005  # mm: the servo's in-position band (2 counts) on --sim; exact on --dry-run
 os.environ["HOME"] = work  # bCNC reads and writes ~/.bCNC
 sys.path[:0] = [BCNC, BCNC + "/lib", BCNC + "/plugins", BCNC + "/controllers"]
 
@@ -141,8 +141,9 @@ def run(device):
     # "Nothing moves" is four more status reports at the held position.
     after = s.reports + 4
     wait_for("four status reports while held", lambda: s.reports >= after)
-    assert CNC.vars["state"] == "Hold:0" and (CNC.vars["mx"], CNC.vars["my"]) == held, \
-        "moved while held: %s -> %s" % (held, (CNC.vars["mx"], CNC.vars["my"]))
+    now = (CNC.vars["mx"], CNC.vars["my"])
+    assert CNC.vars["state"] == "Hold:0" and all(abs(a - b) <= END_TOLERANCE for a, b in zip(now, held)), \
+        "moved while held: %s -> %s" % (held, now)
     print("%s: held at X%.3f Y%.3f" % (device, held[0], held[1]))
     s.resume()
     wait_for("Run after the resume", lambda: CNC.vars["state"] == "Run")
