@@ -14,13 +14,18 @@ target_link_libraries(test_grbl_stream PRIVATE mc_grbl)
 mc_gtest(test_grbl_server unit test_grbl_server.cpp)
 target_link_libraries(test_grbl_server PRIVATE mc_grbl)
 
+# The engine on the board backend and the virtual board in process, in board
+# time: streaming with look-ahead, hold, overrides, dwells, faults, resets.
+mc_gtest(test_grbl_board system test_grbl_board.cpp)
+target_link_libraries(test_grbl_board PRIVATE mc_grbl mc_vboard)
+
 # motionctl serve itself: errors, a live run over TCP, SIGTERM, the settings file.
 mc_gtest(test_grbl_cli unit test_grbl_cli.cpp)
 target_compile_definitions(test_grbl_cli PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
 add_dependencies(test_grbl_cli motionctl)
 
 # Real senders (label client), each running a job on `motionctl serve
-# --dry-run` with a hold, a resume and a feed override: cncjs 1.11.5 (from npm
+# --dry-run` (and below on --sim) with a hold, a resume and a feed override: cncjs 1.11.5 (from npm
 # by scripts/deps.sh) through its own server and socket.io API, and Debian's
 # bCNC through its Sender class, on the PTY and on socket://.
 find_program(MC_NODE node)
@@ -34,3 +39,11 @@ set_tests_properties(GrblClient.cncjs PROPERTIES LABELS client TIMEOUT 300)
 # Debian's python3 by path: bCNC needs Debian's tk and pyserial, not another python on PATH.
 add_test(NAME GrblClient.bcnc COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_bcnc.py $<TARGET_FILE:motionctl>)
 set_tests_properties(GrblClient.bcnc PROPERTIES LABELS client TIMEOUT 300)
+# The same senders on `motionctl --sim serve`: the board backend, the planner
+# and the virtual board, with a shorter job (the virtual board runs in real time).
+add_test(NAME GrblClient.cncjs.sim
+  COMMAND ${MC_NODE} ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_cncjs.js $<TARGET_FILE:motionctl> ${MC_CNCJS_DIR} --sim)
+set_tests_properties(GrblClient.cncjs.sim PROPERTIES LABELS client TIMEOUT 180)
+add_test(NAME GrblClient.bcnc.sim
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_bcnc.py $<TARGET_FILE:motionctl> --sim)
+set_tests_properties(GrblClient.bcnc.sim PROPERTIES LABELS client TIMEOUT 180)

@@ -43,7 +43,9 @@ std::string read_until(int fd, const std::string& needle) {
 TEST(GrblCli, ErrorsAreOneLine) {
   TempDir d;
   mc::test::expect_one_error_line({"serve"}, "--pty/--tcp");
-  mc::test::expect_one_error_line({"--sim", "serve", "--pty", (d.path / "l").string()}, "--dry-run");
+  // Refused before the board is touched (no virtual board is started).
+  mc::test::expect_one_error_line({"--sim", "serve", "--pty", (d.path / "l").string(), "--watchdog", "5s"},
+                                  "watchdog period = 5 s");
   mc::test::expect_one_error_line({"serve", "--pty", "/nonexistent/dir/link"}, "symlink");
   const std::string bad = (d.path / "bad.toml").string();
   std::ofstream(bad) << "[setings]\n";

@@ -21,9 +21,7 @@
 #include "host/cli/commands.hpp"
 #include "host/link/board_capture.hpp"
 #include "host/link/board_state.hpp"
-#include "host/machine/gains_file.hpp"
 #include "host/machine/job.hpp"
-#include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -74,17 +72,16 @@ bool pauses(const Move& m) {
 class Progress {
  public:
   Progress(const mc::machine::Job& j, bool on) : j_(j), on_(on && ::isatty(STDERR_FILENO)) {}
-  void show(size_t piece) {
-    if (!on_ || piece >= j_.pieces.size()) return;
+  void show(double t, int line) {
+    if (!on_) return;
     const auto now = std::chrono::steady_clock::now();
     if (now - last_ < std::chrono::milliseconds(100)) return;
     last_ = now;
-    const double total = j_.summary.time_s, t = j_.pieces[piece].t_end;
+    const double total = j_.summary.time_s;
     const double f = total > 0 ? t / total : 1;
     const int width = 30, filled = int(f * width);
     std::fprintf(stderr, "\r[%s%s] %3.0f%%  line %-6d  ETA %-8s", std::string(size_t(filled), '#').c_str(),
-                 std::string(size_t(width - filled), '.').c_str(), 100 * f,
-                 j_.moves[size_t(j_.pieces[piece].move)].line,
+                 std::string(size_t(width - filled), '.').c_str(), 100 * f, line,
                  format_duration(std::max(0.0, total - t)).c_str());
     std::fflush(stderr);
     shown_ = true;
@@ -127,17 +124,9 @@ void run_job(const RunOptions& o) {
   }
   Board b = open_board();
   BoardLink& l = *b.link;
-  BoardState st = read_state(l);
-  std::vector<int> axes;
-  for (int a = 0; a < int(m.axes.size()) && a < st.naxes; ++a) axes.push_back(a);
-  if (axes.size() < m.axes.size())
-    throw InputError("machine config", m.source, "a board with " + std::to_string(m.axes.size()) + " axes",
-                     "the board has " + std::to_string(st.naxes));
-  // A fresh board (the virtual one after start) has no gains: the machine's.
-  if (mc::machine::gains_where_missing(l, m, note) > 0) st = read_state(l);
-  // Plan from where the axes are (enabling starts the command there).
-  const Vec3 at = enable_axes(l, axes, note);
-  mc::machine::arm_following_limits(l, m);  // a runaway trips FERR instead of running on
+  const mc::machine::JobBoard jb = mc::machine::ready_board(l, m, note);
+  const std::vector<int>& axes = jb.axes;
+  const Vec3 at = jb.at;
   const mc::host::PlannerConfig cfg = mc::machine::planner_config(m);
   const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg), level ? &*level : nullptr);
   // Ctrl-C from here on stops the job along the path; the line below says so.
@@ -152,9 +141,9 @@ void run_job(const RunOptions& o) {
   StreamOptions so;
   so.queue_ahead_s = m.planner.queue_ahead_s;
   for (int a : axes) so.telemetry_axes |= 1u << a;
-  so.ts_s = st.ts_s();
+  so.ts_s = jb.ts_s;
   so.stop = &interrupt_requested();
-  so.progress = [&](size_t p) { bar.show(p); };
+  so.progress = [&](double t, int line) { bar.show(t, line); };
   so.action = [&](const Move& mv) {
     bar.clear();
     if (o.json) return;
@@ -171,7 +160,7 @@ void run_job(const RunOptions& o) {
   const StreamResult r = stream_job(l, j.moves, j.pieces, cfg, so);
   bar.clear();
   if (r.stopped) disable_axes(l, axes, true);
-  const mc::machine::JobReport rep = mc::machine::report(j, r, st.ts_s());
+  const mc::machine::JobReport rep = mc::machine::report(j, r, jb.ts_s);
   if (!o.plot.empty()) plot_run(o.plot, j, r);
   if (!o.csv.empty()) {
     std::ofstream f(o.csv);
@@ -179,7 +168,7 @@ void run_job(const RunOptions& o) {
     for (const JobSample& x : r.samples) {
       const Vec3d c = to_mm(Vec3{x.cmd[0], x.cmd[1], x.cmd[2]}, cfg),
                   p = to_mm(Vec3{x.pos[0], x.pos[1], x.pos[2]}, cfg);
-      f << double(x.n - r.samples.front().n) * st.ts_s() << ',' << c[0] << ',' << c[1] << ',' << c[2] << ','
+      f << double(x.n - r.samples.front().n) * jb.ts_s << ',' << c[0] << ',' << c[1] << ',' << c[2] << ','
         << p[0] << ',' << p[1] << ',' << p[2] << '\n';
     }
   }

@@ -8,8 +8,10 @@
 #include <string>
 
 #include "host/base/errors.hpp"
+#include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
 #include "host/cli/commands.hpp"
+#include "host/grbl/board_backend.hpp"
 #include "host/grbl/dry_run_backend.hpp"
 #include "host/grbl/server.hpp"
 
@@ -22,11 +24,13 @@ struct ServeOptions {
   bool dry_run = false;
   std::string settings;
   int blocks = 16;
+  std::string watchdog;  // empty: the board's
 };
 
 // The machine behind the Grbl front end and what moves it along between
 // rounds of the server loop.
 struct Machine {
+  Board board;  // the link the board backend uses (none for --dry-run); outlives it
   std::unique_ptr<mc::grbl::Backend> backend;
   std::function<void()> tick;
   std::string what;
@@ -34,9 +38,9 @@ struct Machine {
 
 // ---------------------------------------------------------------------------
 // THE place where the Grbl server's backend is constructed. --dry-run (or no
-// --port/--sim) runs the kinematic dry-run machine on the wall clock; the
-// board backend (host/motion: planner and segment streaming to --port or
-// --sim) is to be constructed here.
+// --port/--sim) runs the kinematic dry-run machine on the wall clock; --port
+// or --sim the board (or the virtual board) through the planner, one link
+// round per round of the server loop.
 // ---------------------------------------------------------------------------
 Machine make_backend(const ServeOptions& o) {
   const GlobalOptions& g = global_options();
@@ -54,8 +58,16 @@ Machine make_backend(const ServeOptions& o) {
     m.what = "the dry-run machine (no hardware: moves are timed, nothing drives a motor)";
     return m;
   }
-  throw InputError(g.sim ? "--sim" : "--port", g.sim ? "given" : quote(g.port), "--dry-run for now",
-                   "the board backend of 'serve' is not built yet");
+  const double wdog = o.watchdog.empty() ? 0.0 : parse_duration(o.watchdog, "--watchdog");
+  if (wdog > 0) mc::grbl::watchdog_cycles(wdog, machine().clock_hz);  // refused before the board is touched
+  Machine m;
+  m.board = open_board();
+  auto board = std::make_unique<mc::grbl::BoardBackend>(*m.board.link, machine(), o.blocks, note, wdog);
+  mc::grbl::BoardBackend* b = board.get();
+  m.tick = [b] { b->tick(); };
+  m.backend = std::move(board);
+  m.what = m.board.where;
+  return m;
 }
 
 void run_serve(const ServeOptions& o) {
@@ -93,7 +105,12 @@ void add_serve_command(CLI::App& app) {
                 "Grbl settings file (default: next to --config as NAME.grbl.toml, else "
                 "~/.config/motionctl/grbl.toml)")
       ->type_name("FILE");
-  c->add_option("--blocks", o->blocks, "Planner blocks of the dry-run machine (default 16)")->type_name("N");
+  c->add_option("--blocks", o->blocks, "Planner blocks: lines queued ahead of the machine (default 16)")
+      ->type_name("N");
+  c->add_option("--watchdog", o->watchdog,
+                "With --port/--sim: the board's watchdog period while serving, e.g. 500ms (default: the "
+                "board's, 100 ms): the drives go off this long after the last frame")
+      ->type_name("TIME");
   c->callback([o] { run_serve(*o); });
 }
 

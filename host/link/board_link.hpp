@@ -78,6 +78,8 @@ class BoardLink {
   // Telemetry frames received so far (in order), for captures.
   std::deque<proto::Frame>& telemetry() { return tlm_; }
   const LinkCounters& counters() const;
+  // The stream's clock: board time over the in-process virtual board.
+  std::chrono::steady_clock::time_point now() const { return s_.now(); }
   const std::string& port_name() const { return name_; }
 
  private:

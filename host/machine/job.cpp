@@ -8,6 +8,8 @@
 #include <stdexcept>
 
 #include "host/base/errors.hpp"
+#include "host/machine/gains_file.hpp"
+#include "host/machine/limits.hpp"
 
 namespace mc::machine {
 
@@ -71,6 +73,22 @@ Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start
   std::ostringstream text;
   text << in.rdbuf();
   return plan_program(text.str(), path, m, start, level);
+}
+
+JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note) {
+  mc::host::BoardState st = mc::host::read_state(l);
+  JobBoard b;
+  for (int a = 0; a < int(m.axes.size()) && a < st.naxes; ++a) b.axes.push_back(a);
+  if (b.axes.size() < m.axes.size())
+    throw InputError("machine config", m.source, "a board with " + std::to_string(m.axes.size()) + " axes",
+                     "the board has " + std::to_string(st.naxes));
+  // A fresh board (the virtual one after start) has no gains: the machine's.
+  if (gains_where_missing(l, m, note) > 0) st = mc::host::read_state(l);
+  b.ts_s = st.ts_s();
+  // Enabling starts the command where the axes are.
+  b.at = mc::host::enable_axes(l, b.axes, note);
+  arm_following_limits(l, m);  // a runaway trips FERR instead of running on
+  return b;
 }
 
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,

@@ -11,6 +11,7 @@
 
 #include "host/control/metrics.hpp"
 #include "host/gcode/interpreter.hpp"
+#include "host/link/board_state.hpp"
 #include "host/machine/height_map.hpp"
 #include "host/machine/machine_config.hpp"
 #include "host/motion/job_stream.hpp"
@@ -50,6 +51,18 @@ Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Ve
              const HeightMap* level = nullptr);
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m,
                  const mc::host::Vec3d& start, const HeightMap* level = nullptr);
+
+// A board ready to run a job: every axis of the machine present, gains
+// where the board has none (the machine's, with a note), the drives armed,
+// the PIDs enabled and the following-error limits armed. Throws InputError
+// when the board has fewer axes than the machine, BoardError for a latched
+// fault other than the watchdog's.
+struct JobBoard {
+  std::vector<int> axes;
+  mc::host::Vec3 at{};  // the interpolator's position, counts: where the job starts
+  double ts_s = 0;      // the PID sample period
+};
+JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note);
 
 struct JobReport {
   double planned_s = 0;  // of what ran

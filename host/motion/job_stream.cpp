@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "host/base/errors.hpp"
@@ -61,17 +62,262 @@ class TelemetryLog {
   TelemetryUnwrap unwrap_;
 };
 
-std::string line_of(const std::vector<Move>& moves, const std::vector<Piece>& p, size_t i) {
-  if (i >= p.size()) return "the end of the job";
-  return "line " + std::to_string(moves[size_t(p[i].move)].line);
-}
-
 }  // namespace
 
-StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std::vector<Piece>& input,
+JobStreamer::JobStreamer(BoardLink& l, const PlannerConfig& cfg, const Vec3& at, double queue_ahead_s)
+    : l_(l), cfg_(cfg), ahead_s_(queue_ahead_s), at_(at) {
+  segs_base_ = l_.read(br::IP_SEGS) & 0xFFFF;
+  l_.write(br::IP_CTRL, 1u << bb::I_CLR);
+}
+
+void JobStreamer::load(const std::vector<Move>& moves, const std::vector<Piece>& pieces) {
+  if (!drained()) throw std::logic_error("JobStreamer::load while segments are queued");
+  drop_queue();
+  orig_ = plan_ = moves;
+  pieces_ = pieces;
+  if (!pieces.empty()) t_ = pieces.front().t_end - pieces.front().seg.duration;
+}
+
+void JobStreamer::append(const std::vector<Move>& moves) {
+  if (moves.empty()) return;
+  orig_.insert(orig_.end(), moves.begin(), moves.end());
+  // Detached (a stop's tail under way): planned once the tail is out.
+  if (attached_) replan();
+}
+
+Vec3d JobStreamer::end() const {
+  return orig_.empty() ? to_mm(at_, cfg_) : orig_.back().end;
+}
+
+void JobStreamer::drop_queue() {
+  orig_.clear();
+  plan_.clear();
+  pieces_.clear();
+  next_ = 0;
+  attached_ = true;
+  hold_ = false;
+  last_.reset();
+  flight_.clear();
+  v_ = 0;
+}
+
+void JobStreamer::rebase() {
+  if (!last_) return;
+  const size_t mi = size_t(last_->piece.move);
+  std::vector<Move> rest;
+  v_ = 0;
+  if (last_->move.is_motion()) {
+    Piece p = last_->piece;
+    p.move = 0;
+    const PathPoint pe = piece_end({last_->move}, p, cfg_);
+    v_ = pe.v;
+    const Move& m = orig_[mi];
+    if (pe.s < m.length - 1e-9) rest.push_back(sub_move(m, pe.s, m.length));
+  }
+  rest.insert(rest.end(), orig_.begin() + long(mi) + 1, orig_.end());
+  orig_ = std::move(rest);
+  at_ = last_->piece.seg.end;
+  t_ = last_->piece.t_end;
+  last_.reset();
+}
+
+void JobStreamer::replan() {
+  rebase();
+  plan_ = orig_;
+  plan_speeds(plan_, cfg_, feed_, rapid_, v_);
+  if (!plan_.empty() && plan_[0].is_motion() && v_ > plan_[0].v_nominal * (1 + 1e-9)) {
+    // The feed went down under the machine: first slow to the new feed at
+    // the limit along the path (those parts keep the speed they carry),
+    // then the rest at it.
+    std::vector<size_t> src;
+    std::vector<Move> lead = slow_down(plan_, PathPoint{0, 0, v_}, plan_[0].v_nominal, &src);
+    if (!lead.empty()) {
+      for (Move& m : lead) {
+        m.v_nominal = m.v_entry;
+        m.no_override = true;
+        m.rapid = m.exact_stop = false;
+      }
+      const size_t j = src.back();
+      const double s_to = lead.back().length;  // every part after the first starts at its move's start
+      std::vector<Move> rest = std::move(lead);
+      if (s_to < orig_[j].length - 1e-9) rest.push_back(sub_move(orig_[j], s_to, orig_[j].length));
+      rest.insert(rest.end(), orig_.begin() + long(j) + 1, orig_.end());
+      orig_ = std::move(rest);
+      plan_ = orig_;
+      plan_speeds(plan_, cfg_, feed_, rapid_, v_);
+    }
+  }
+  pieces_ = chop_from(plan_, cfg_, at_, t_);
+  next_ = 0;
+}
+
+void JobStreamer::hold() {
+  if (hold_) return;
+  hold_ = true;
+  if (!attached_) return;  // a stop is under way already
+  replan();
+  std::vector<Piece> tail;
+  if (v_ > 1e-9 && !plan_.empty()) {
+    std::vector<size_t> src;
+    const std::vector<Move> parts = slow_down(plan_, PathPoint{0, 0, v_}, 0, &src);
+    tail = chop_from(parts, cfg_, at_, t_);
+    for (Piece& p : tail) p.move = int(src[size_t(p.move)]);
+    if (!parts.empty()) {
+      // What is left after the stop: from where the last part ends.
+      const size_t j = src.back();
+      const double s_to = parts.back().length;
+      std::vector<Move> rest;
+      if (s_to < orig_[j].length - 1e-9) rest.push_back(sub_move(orig_[j], s_to, orig_[j].length));
+      rest.insert(rest.end(), orig_.begin() + long(j) + 1, orig_.end());
+      orig_ = std::move(rest);
+      if (!tail.empty()) {
+        at_ = tail.back().seg.end;
+        t_ = tail.back().t_end;
+      }
+    }
+  }
+  v_ = 0;
+  pieces_ = std::move(tail);
+  next_ = 0;
+  attached_ = false;
+}
+
+void JobStreamer::resume() {
+  hold_ = false;  // send() plans the rest once the stop's tail is out
+}
+
+void JobStreamer::stop() {
+  hold();
+  orig_.clear();
+  hold_ = false;
+}
+
+void JobStreamer::set_overrides(double feed, double rapid) {
+  if (feed == feed_ && rapid == rapid_) return;
+  feed_ = feed;
+  rapid_ = rapid;
+  if (attached_) replan();
+}
+
+Vec3 JobStreamer::abort() {
+  l_.write(br::IP_CTRL, 1u << bb::I_ABORT | 1u << bb::I_CLR);
+  // The command reads the stopped interpolator from the next PID sample on:
+  // read until two rounds agree.
+  Vec3 at{}, before{};
+  for (int round = 0; round < 8; ++round) {
+    for (size_t k = 0; k < 3; ++k)
+      if (cfg_.axes[k].present) at[k] = int32_t(l_.read(br::axis(int(k), br::AX_CMD)));
+    if (round > 0 && at == before) break;
+    before = at;
+  }
+  restart(at);
+  return at;
+}
+
+void JobStreamer::restart(const Vec3& at) {
+  drop_queue();
+  at_ = at;
+  segs_base_ = l_.read(br::IP_SEGS) & 0xFFFF;
+  sent_ = done_ = 0;
+  busy_ = false;
+}
+
+JobStreamer::State JobStreamer::state() const {
+  if (hold_) return flight_.empty() && !busy_ && next_ >= pieces_.size() ? State::held : State::holding;
+  return drained() ? State::idle : State::run;
+}
+
+bool JobStreamer::drained() const {
+  return flight_.empty() && !busy_ && next_ >= pieces_.size() && (attached_ || orig_.empty());
+}
+
+Vec3 JobStreamer::command_end() const {
+  return last_ ? last_->piece.seg.end : at_;
+}
+
+std::optional<JobStreamer::Running> JobStreamer::current() const {
+  if (!flight_.empty()) return flight_.front().what;
+  if (next_ < pieces_.size()) {
+    const Move& m = plan_[size_t(pieces_[next_].move)];
+    return Running{m.line, m.no_override, pieces_[next_].t_end, 0};
+  }
+  if (!attached_ && !orig_.empty()) return Running{orig_.front().line, orig_.front().no_override, t_, 0};
+  return std::nullopt;
+}
+
+void JobStreamer::record(const Piece& p, const Move& m) {
+  if (!p.action) {
+    double cpm = 0;  // the path's scale: the axes share one on a sane machine
+    for (const AxisLimits& a : cfg_.axes)
+      if (a.present && cpm == 0) cpm = a.counts_per_mm;
+    const bool moves = p.seg.seg.type != seg::T_DWELL && p.seg.duration > 0 && cpm > 0;
+    const double feed = moves ? p.seg.length / p.seg.duration / cpm : 0;
+    flight_.push_back(Flight{Running{m.line, m.no_override, p.t_end, feed}, p.t_end - p.seg.duration});
+    ++sent_;
+    ++segments_;
+  }
+  last_line_ = m.line;
+  t_sent_ = p.t_end;
+  if (attached_) last_ = Sent{m, p};
+}
+
+void JobStreamer::poll() {
+  const uint32_t stat = l_.read(br::IP_STAT);
+  fault_ = l_.read(br::FAULT);
+  // IP_SEGS is 16 bits: unwrap against what was sent.
+  uint64_t done = (l_.read(br::IP_SEGS) - segs_base_) & 0xFFFF;
+  while (done + 0x10000 <= sent_) done += 0x10000;
+  done = std::min(done, sent_);
+  for (; done_ < done; ++done_) flight_.pop_front();
+  busy_ = stat & (1u << bb::IS_BUSY);
+  if (stat & (1u << bb::IS_UNDERRUN)) {
+    ++underruns_;
+    l_.write(br::IP_CTRL, 1u << bb::I_CLR);
+  }
+  if (fault_) {
+    const std::string where = flight_.empty() ? (next_ < pieces_.size() ? "line " + std::to_string(last_line_)
+                                                                        : std::string("the end of the job"))
+                                              : "line " + std::to_string(flight_.front().what.line);
+    drop_queue();
+    throw BoardError("motion stopped by a fault at " + where + ": " + fault_names(fault_));
+  }
+  send();
+}
+
+void JobStreamer::send() {
+  if (!attached_ && next_ >= pieces_.size() && !hold_) {
+    // The stop's tail is out: what was kept runs from where it ends.
+    attached_ = true;
+    replan();
+  }
+  while (next_ < pieces_.size()) {
+    const Piece& p = pieces_[next_];
+    if (p.action) {
+      if (!flight_.empty() || busy_) break;  // the queue drains first
+      const Move m = plan_[size_t(p.move)];
+      record(p, m);
+      ++next_;
+      if (on_action) on_action(m);
+      continue;
+    }
+    // Planned time queued: from the start of the first piece not done to
+    // the end of the last one sent.
+    const double from = flight_.empty() ? p.t_end - p.seg.duration : flight_.front().t_start;
+    if (flight_.size() >= 2 && flight_.back().what.t_end - from >= ahead_s_) break;
+    // A batch stops at the planned time too: a hold waits for what is queued.
+    std::vector<seg::Words> batch;
+    size_t k = next_;
+    while (k < pieces_.size() && !pieces_[k].action && batch.size() < kBatch &&
+           (batch.size() < 2 || pieces_[k - 1].t_end - from < ahead_s_))
+      batch.push_back(seg::pack(pieces_[k++].seg.seg));
+    if (!l_.segments(batch)) break;  // FULL: the board takes them later
+    for (; next_ < k; ++next_) record(pieces_[next_], plan_[size_t(pieces_[next_].move)]);
+  }
+}
+
+StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std::vector<Piece>& pieces,
                         const PlannerConfig& cfg, const StreamOptions& o) {
   StreamResult r;
-  std::vector<Piece> pieces = input;
   uint32_t decim = o.telemetry_decim;
   if (o.telemetry_axes && decim == 0) {
     if (!(o.ts_s > 0)) throw InputError("sample period", format_number(o.ts_s) + " s", "above 0");
@@ -82,81 +328,34 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
     const double busy_s = 10.0 * (telemetry_frame_bytes(n) + 4 * kReplyBytes) / baud;
     decim = uint32_t(std::max(1.0, std::ceil(busy_s / o.ts_s)));
   }
+  if (moves.empty()) return r;
   TelemetryLog tlm(l, o.telemetry_axes, decim);
-
-  const uint32_t segs0 = l.read(br::IP_SEGS) & 0xFFFF;
-  l.write(br::IP_CTRL, 1u << bb::I_CLR);
-  std::vector<size_t> sent_piece;  // the piece of each segment sent, in order
-  size_t next = 0;                 // the next piece to send
-  size_t done = 0;                 // segments the board has finished
-  bool stopping = false;
-  size_t shown = size_t(-1);
-
+  JobStreamer s(l, cfg, to_counts(moves.front().start, cfg), o.queue_ahead_s);
+  s.on_action = o.action;
+  s.load(moves, pieces);
+  double shown = -1;
   for (;;) {
-    if (o.stop && o.stop->load() && !stopping) {
-      stopping = true;
-      r.stopped = true;
+    if (o.stop && o.stop->load() && !r.stopped) {
       // The queued tail keeps running; after it, a stop at the limit along
       // the path instead of the rest of the job.
-      std::vector<Piece> tail;
-      if (!sent_piece.empty()) tail = stop_after(moves, pieces, sent_piece.back(), cfg);
-      pieces.resize(next);
-      pieces.insert(pieces.end(), tail.begin(), tail.end());
-      r.stopped_at_line = pieces.empty() ? 0 : moves[size_t(pieces.back().move)].line;
+      r.stopped = true;
+      s.stop();
     }
-    // Feed the queue up to the planned time ahead.
-    while (next < pieces.size()) {
-      if (pieces[next].action) {
-        if (done < sent_piece.size()) break;  // let the queue drain first
-        if (l.read(br::IP_STAT) & (1u << bb::IS_BUSY)) break;
-        if (o.action) o.action(moves[size_t(pieces[next].move)]);
-        ++next;
-        continue;
-      }
-      // Planned time queued: from the start of the first piece not done to
-      // the end of the last one sent.
-      if (done < sent_piece.size()) {
-        const Piece& first = pieces[sent_piece[done]];
-        const double queued = pieces[sent_piece.back()].t_end - (first.t_end - first.seg.duration);
-        if (queued >= o.queue_ahead_s && sent_piece.size() - done >= 2) break;
-      }
-      std::vector<seg::Words> batch;
-      size_t k = next;
-      while (k < pieces.size() && !pieces[k].action && batch.size() < kBatch)
-        batch.push_back(seg::pack(pieces[k++].seg.seg));
-      if (!l.segments(batch)) break;  // FULL: the board takes them later
-      for (size_t i = next; i < k; ++i) sent_piece.push_back(i);
-      next = k;
-    }
-    // What the board has done.
-    const uint32_t stat = l.read(br::IP_STAT);
-    const uint32_t fault = l.read(br::FAULT);
-    done = size_t((l.read(br::IP_SEGS) - segs0) & 0xFFFF);
-    // IP_SEGS is 16 bits: unwrap against what was sent.
-    while (done + 0x10000 <= sent_piece.size()) done += 0x10000;
-    done = std::min(done, sent_piece.size());
-    if (stat & (1u << bb::IS_UNDERRUN)) {
-      ++r.underruns;
-      l.write(br::IP_CTRL, 1u << bb::I_CLR);
-    }
+    s.poll();
     tlm.drain(r);
-    if (fault)
-      throw BoardError("motion stopped by a fault at " +
-                       line_of(moves, pieces, done < sent_piece.size() ? sent_piece[done] : pieces.size()) +
-                       ": " + fault_names(fault));
-    const size_t running = done < sent_piece.size() ? sent_piece[done] : next;
-    if (o.progress && running != shown) {
-      o.progress(running);
-      shown = running;
+    if (const auto c = s.current(); c && o.progress && c->t_end != shown) {
+      o.progress(c->t_end, c->line);
+      shown = c->t_end;
     }
-    const bool busy = stat & (1u << bb::IS_BUSY);
-    if (next >= pieces.size() && done >= sent_piece.size() && !busy) break;
+    if (s.drained()) break;
     l.poll(std::chrono::milliseconds(1));
   }
   tlm.drain(r);
   r.gaps = tlm.gaps();
-  r.segments = sent_piece.size();
-  r.planned_s = pieces.empty() ? 0 : pieces.back().t_end;
+  r.segments = s.segments();
+  r.underruns = s.underruns();
+  r.planned_s = s.planned_s();
+  if (r.stopped) r.stopped_at_line = s.last_line();
   return r;
 }
 

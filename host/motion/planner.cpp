@@ -364,11 +364,12 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
   return out;
 }
 
-void plan_speeds(std::vector<Move>& moves, const PlannerConfig& cfg, double feed_scale, double rapid_scale) {
+void plan_speeds(std::vector<Move>& moves, const PlannerConfig& cfg, double feed_scale, double rapid_scale,
+                 double v_start) {
   const double rate_max = core_rate_limit(cfg);
   for (Move& m : moves) {
     if (!m.is_motion()) continue;
-    double v = m.rapid ? kInf : m.v_nominal * feed_scale;
+    double v = m.rapid ? kInf : m.v_nominal * (m.no_override ? 1.0 : feed_scale);
     double a = kInf;
     if (m.kind == Move::Kind::line) {
       const Vec3d u = tangent(m, false);
@@ -402,6 +403,7 @@ void plan_speeds(std::vector<Move>& moves, const PlannerConfig& cfg, double feed
     Move& m = moves[i];
     if (!m.is_motion()) continue;
     m.v_entry_max = 0;
+    if (i == 0) m.v_entry_max = v_start;
     if (i == 0 || !moves[i - 1].is_motion() || moves[i - 1].exact_stop) continue;
     const Move& p = moves[i - 1];
     const Vec3d u1 = tangent(p, true), u2 = tangent(m, false);
@@ -450,7 +452,7 @@ void plan_speeds(std::vector<Move>& moves, const PlannerConfig& cfg, double feed
     next_entry = m.v_entry;
   }
   // Forward: and reach its entry speed from where it starts.
-  double prev_exit = 0;
+  double prev_exit = v_start;
   for (Move& m : moves) {
     if (!m.is_motion()) {
       prev_exit = 0;
@@ -647,10 +649,41 @@ void mark_stops(std::vector<Piece>& pieces) {
 
 std::vector<Piece> chop(const std::vector<Move>& moves, const PlannerConfig& cfg) {
   if (moves.empty()) return {};
-  Chopper c(cfg, to_counts(moves.front().start, cfg), 0);
+  return chop_from(moves, cfg, to_counts(moves.front().start, cfg), 0);
+}
+
+std::vector<Piece> chop_from(const std::vector<Move>& moves, const PlannerConfig& cfg,
+                             const Vec3& start_counts, double t0) {
+  Chopper c(cfg, start_counts, t0);
   for (size_t i = 0; i < moves.size(); ++i) c.add(moves, i);
   mark_stops(c.pieces());
   return std::move(c.pieces());
+}
+
+Move sub_move(const Move& m, double s_from, double s_to) {
+  Move part = m;
+  part.start = point_at(m, s_from);
+  part.end = point_at(m, s_to);
+  part.length = std::max(0.0, s_to - s_from);
+  if (m.kind == Move::Kind::arc && m.length > 0) {
+    part.sweep = m.sweep * part.length / m.length;
+    part.radius = radius_of(m, part.start);
+  }
+  return part;
+}
+
+PathPoint piece_end(const std::vector<Move>& moves, const Piece& piece, const PlannerConfig& cfg) {
+  PathPoint p;
+  p.move = size_t(piece.move);
+  const Move& m = moves[p.move];
+  if (!m.is_motion()) return p;
+  const Vec3d q = to_mm(piece.seg.end, cfg);
+  const double s = m.kind == Move::Kind::arc ? m.length * swept_to(m, q, m.sweep / 2) / m.sweep
+                                             : dot(sub(q, m.start), tangent(m, false));
+  p.s = std::clamp(s, 0.0, m.length);
+  const Profile pr = profile(m);
+  p.v = v_at(pr, t_at(pr, p.s));
+  return p;
 }
 
 std::array<double, 3> peak_accel(const std::vector<Piece>& pieces, const PlannerConfig& cfg,
@@ -712,50 +745,43 @@ std::array<double, 3> peak_accel(const std::vector<Piece>& pieces, const Planner
   return peak;
 }
 
-std::vector<Piece> stop_after(const std::vector<Move>& moves, const std::vector<Piece>& pieces, size_t k,
-                              const PlannerConfig& cfg) {
-  if (k >= pieces.size() || pieces[k].action || pieces[k].seg.seg.type == seg::T_DWELL) return {};
-  const Piece& last = pieces[k];
-  const size_t mi = size_t(last.move);
-  const Move& m = moves[mi];
-  const Profile pr = profile(m);
-  // Where the piece ends on its move, and the profile's speed there.
-  const Vec3d q = to_mm(last.seg.end, cfg);
-  double s0 = m.kind == Move::Kind::arc ? m.length * swept_to(m, q, m.sweep / 2) / m.sweep
-                                        : dot(sub(q, m.start), tangent(m, false));
-  s0 = std::clamp(s0, 0.0, m.length);
-  double v = v_at(pr, t_at(pr, s0));
-  if (v <= 1e-9 || (k + 1 < pieces.size() && pieces[k + 1].action)) return {};
-  // Decelerate at each move's limit along the rest of the path.
-  std::vector<Move> tail;
-  size_t j = mi;
-  double s_from = s0;
-  while (v > 1e-9 && j < moves.size() && moves[j].is_motion()) {
+std::vector<Move> slow_down(const std::vector<Move>& moves, const PathPoint& at, double v_to,
+                            std::vector<size_t>* source) {
+  std::vector<Move> out;
+  size_t j = at.move;
+  double v = at.v, s_from = at.s;
+  while (v > v_to + 1e-9 && j < moves.size() && moves[j].is_motion()) {
     const Move& mj = moves[j];
     const double left = mj.length - s_from;
-    const double need = v * v / (2 * mj.accel);
-    Move part = mj;
+    const double need = (v * v - v_to * v_to) / (2 * mj.accel);
     const double s_to = need < left ? s_from + need : mj.length;
-    part.start = point_at(mj, s_from);
-    part.end = point_at(mj, s_to);
-    part.length = s_to - s_from;
-    if (mj.kind == Move::Kind::arc) {
-      part.sweep = mj.sweep * part.length / mj.length;
-      part.radius = radius_of(mj, part.start);
-    }
+    Move part = sub_move(mj, s_from, s_to);
     part.v_entry = v;
-    part.v_exit = need < left ? 0 : std::sqrt(std::max(0.0, v * v - 2 * mj.accel * left));
+    part.v_exit = need < left ? v_to : std::sqrt(std::max(0.0, v * v - 2 * mj.accel * left));
     part.v_nominal = v;
-    if (part.length > 1e-9) tail.push_back(part);
+    if (part.length > 1e-9) {
+      out.push_back(part);
+      if (source) source->push_back(j);
+    }
     v = part.v_exit;
     s_from = 0;
     ++j;
   }
-  Chopper c(cfg, last.seg.end, last.t_end);
-  for (size_t i = 0; i < tail.size(); ++i) c.add(tail, i);
-  std::vector<Piece> out = std::move(c.pieces());
+  return out;
+}
+
+std::vector<Piece> stop_after(const std::vector<Move>& moves, const std::vector<Piece>& pieces, size_t k,
+                              const PlannerConfig& cfg) {
+  if (k >= pieces.size() || pieces[k].action || pieces[k].seg.seg.type == seg::T_DWELL) return {};
+  const Piece& last = pieces[k];
+  const PathPoint at = piece_end(moves, last, cfg);
+  if (at.v <= 1e-9 || (k + 1 < pieces.size() && pieces[k + 1].action)) return {};
+  // Decelerate at each move's limit along the rest of the path.
+  std::vector<size_t> source;
+  const std::vector<Move> tail = slow_down(moves, at, 0, &source);
+  std::vector<Piece> out = chop_from(tail, cfg, last.seg.end, last.t_end);
   // Indices into `moves`, not into the tail.
-  for (Piece& p : out) p.move = int(mi) + p.move;
+  for (Piece& p : out) p.move = int(source[size_t(p.move)]);
   if (!out.empty()) out.back().seg.seg.last = true;
   return out;
 }

@@ -65,8 +65,9 @@ struct Move {
   // action: what runs while the machine stands (spindle, coolant, M0/M1,
   // M6, M2/M30); the streamer waits for the queue to drain first.
   std::optional<gcode::CanonOp> action;
-  bool exact_stop = false;  // G61/G61.1: stop at the end of this move
-  double deviation_mm = 0;  // the junction deviation at its start
+  bool exact_stop = false;   // G61/G61.1: stop at the end of this move
+  bool no_override = false;  // a jog: the feed override does not apply (Grbl)
+  double deviation_mm = 0;   // the junction deviation at its start
   // Limits (mm/s, mm/s^2) and the planned speeds at its ends.
   double v_nominal = 0;
   double accel = 0;
@@ -92,9 +93,12 @@ std::vector<Move> to_moves(const std::vector<gcode::CanonCall>& calls, const Vec
 // Nominal speeds, accelerations and junction limits, then the passes: every
 // move gets the entry and exit speeds of the fastest profile that starts and
 // ends at rest and stays within every limit. feed_scale and rapid_scale are
-// the overrides (1 = 100 %).
+// the overrides (1 = 100 %). v_start: the speed the first move starts at
+// (mm/s) when the machine is already moving there (replanning the rest of a
+// queue from the last segment sent); it must be one the first move can
+// still stop from.
 void plan_speeds(std::vector<Move>& moves, const PlannerConfig& cfg, double feed_scale = 1.0,
-                 double rapid_scale = 1.0);
+                 double rapid_scale = 1.0, double v_start = 0);
 
 // The time a move takes with its planned entry and exit speeds (s).
 double move_time(const Move& m);
@@ -111,6 +115,20 @@ struct Piece {
 // counts, which must be `moves.front().start` rounded. Arcs the core cannot
 // take whole (a rounding that leaves the end off the circle) become chords.
 std::vector<Piece> chop(const std::vector<Move>& moves, const PlannerConfig& cfg);
+// The same from the board position `start_counts` (moves.front().start
+// rounded) and planned time t0: the rest of a queue after what was sent.
+std::vector<Piece> chop_from(const std::vector<Move>& moves, const PlannerConfig& cfg,
+                             const Vec3& start_counts, double t0);
+
+// The part of a motion move between path distances s_from and s_to.
+Move sub_move(const Move& m, double s_from, double s_to);
+// Where pieces[k] ends on its move: the path distance from the move's start
+// and the planned speed there (mm, mm/s).
+struct PathPoint {
+  size_t move = 0;
+  double s = 0, v = 0;
+};
+PathPoint piece_end(const std::vector<Move>& moves, const Piece& piece, const PlannerConfig& cfg);
 
 // mm -> counts, rounded per axis (absent axes 0).
 Vec3 to_counts(const Vec3d& p, const PlannerConfig& cfg);
@@ -123,6 +141,13 @@ Vec3d to_mm(const Vec3& c, const PlannerConfig& cfg);
 // `when`: the planned time of each axis's peak.
 std::array<double, 3> peak_accel(const std::vector<Piece>& pieces, const PlannerConfig& cfg,
                                  std::array<double, 3>* when = nullptr);
+
+// The parts of `moves` (planned) that carry the machine from `at` along the
+// path while it slows at each move's limit to v_to (0: a stop), with their
+// entry and exit speeds set; `source`: the move each part comes from. Ends
+// early where the path leaves motion moves (then at that move's end).
+std::vector<Move> slow_down(const std::vector<Move>& moves, const PathPoint& at, double v_to,
+                            std::vector<size_t>* source = nullptr);
 
 // The pieces that bring the machine to rest from the end of pieces[k]
 // (whose exit speed is the one planned there), along the rest of the path,

@@ -1,0 +1,95 @@
+// The Grbl front end on the board (real or virtual): each line's canonical
+// calls become planned moves (host/motion planner) that a JobStreamer, the
+// same one `motionctl run` uses, feeds to the board's segment queue as they
+// arrive, replanning the part not yet sent with look-ahead over everything
+// queued. Holds, resumes, overrides and jog cancels act on that plan; a soft
+// reset stops the interpolator at once.
+//
+// The server loop calls tick() every round: one round of the link (what the
+// board has done, more segments, the axes' positions), never waiting for the
+// motion, so `?` is answered while a job runs. Board faults become alarms
+// naming the fault; the drives are armed again with the next line once the
+// fault's cause is gone. Spindle and coolant are recorded only (the board
+// has no outputs for them yet); probing and homing are not run yet.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <utility>
+
+#include "host/grbl/backend.hpp"
+#include "host/grbl/settings.hpp"
+#include "host/link/board_state.hpp"
+#include "host/machine/machine_config.hpp"
+#include "host/motion/job_stream.hpp"
+
+namespace mc::grbl {
+
+// The WDOG value of a watchdog period (clock cycles); InputError beyond what
+// the register holds.
+uint32_t watchdog_cycles(double period_s, double clock_hz);
+
+class BoardBackend : public Backend {
+ public:
+  // `l`: a connected link. Readies the board as `motionctl run` does
+  // (mc::machine::ready_board: gains where missing, armed, PIDs and
+  // following-error limits on) and starts where the axes are. watchdog_s:
+  // the board's watchdog period while serving (0: leave the board's, 100 ms
+  // after its reset); InputError beyond what the register holds.
+  BoardBackend(mc::host::BoardLink& l, const mc::machine::MachineConfig& m, int planner_blocks = 16,
+               const mc::host::Note& note = {}, double watchdog_s = 0);
+
+  // One round of the link; throws LinkError when the board stops answering.
+  void tick();
+
+  void configure(const Settings& settings) override;
+  bool ready() const override;
+  void submit(Submission line) override;
+  bool drained() const override;
+  void feed_hold() override;
+  void cycle_start() override;
+  void jog_cancel() override;
+  void soft_reset() override;
+  void set_overrides(const Overrides& o) override;
+  Status status() const override;
+  int planner_blocks() const override { return blocks_; }
+  std::optional<Event> poll_event() override;
+  int home(unsigned axis_mask) override;
+
+  // The planner's limits now ($110.. and $120.. within the machine's).
+  const mc::host::PlannerConfig& planner() const { return cfg_; }
+
+ private:
+  void arm();
+  void read_positions();
+  void fault(uint32_t bits);
+  void action(const mc::host::Move& m);
+
+  mc::host::BoardLink& l_;
+  mc::machine::MachineConfig machine_;
+  mc::host::PlannerConfig base_, cfg_;
+  int blocks_;
+  mc::host::Note note_;
+  std::unique_ptr<mc::host::JobStreamer> s_;
+  bool armed_ = false;
+  // Lines queued and not yet finished: (key, N word). A move's `line` is its
+  // submission's key, counting from 1.
+  std::deque<std::pair<int, int>> lines_;
+  int next_key_ = 1;
+  gcode::Vec3 pos_{};  // machine mm, from the encoders
+  // Motion has stopped on the board but an axis is not yet within
+  // kInPosition counts of its command: a stop (Idle, Hold:0) is reported
+  // once the servo has settled there, or kSettleTimeout after it stopped.
+  bool settling_ = false;
+  std::optional<std::chrono::steady_clock::time_point> stopped_at_;
+  Overrides ovr_;
+  int spindle_ = 0;
+  double rpm_ = 0;
+  bool flood_ = false, mist_ = false;
+  std::deque<Event> events_;
+};
+
+}  // namespace mc::grbl

@@ -1,0 +1,356 @@
+// The Grbl front end on the virtual board, in process and in board time: the
+// protocol engine on a BoardBackend, whose link runs the board only while it
+// waits for a reply or polls (1 ms of board time per round), so every wait
+// below is on the board's clock. A job streamed line by line runs on time
+// (look-ahead over the queue, no stop at every line) and ends at its end
+// point; a hold stops along the path and keeps the rest; overrides change
+// the speed part-way; G4 answers after its dwell; faults, probes, jogs and
+// resets behave as Grbl's.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "hls/board_regs.hpp"
+#include "host/base/errors.hpp"
+#include "host/grbl/board_backend.hpp"
+#include "host/grbl/protocol.hpp"
+#include "host/grbl/settings.hpp"
+#include "host/link/board_link.hpp"
+#include "host/machine/job.hpp"
+#include "sim/vboard/board_stream.hpp"
+#include "sim/vboard/virtual_board.hpp"
+
+namespace mc::grbl::test {
+namespace {
+
+namespace br = board::reg;
+
+struct Report {
+  std::string state;
+  gcode::Vec3 mpos{};
+  double feed = 0, rpm = 0;
+  int ln = 0;
+};
+
+Report parse(const std::string& r) {
+  Report p;
+  std::smatch m;
+  if (std::regex_search(r, m, std::regex("^<([^|>]*)"))) p.state = m[1];
+  if (std::regex_search(r, m, std::regex("MPos:([-0-9.]+),([-0-9.]+),([-0-9.]+)")))
+    p.mpos = {std::stod(m[1]), std::stod(m[2]), std::stod(m[3])};
+  if (std::regex_search(r, m, std::regex("FS:([-0-9.]+),([-0-9.]+)"))) {
+    p.feed = std::stod(m[1]);
+    p.rpm = std::stod(m[2]);
+  }
+  if (std::regex_search(r, m, std::regex("Ln:([0-9]+)"))) p.ln = std::stoi(m[1]);
+  return p;
+}
+
+class BoardRig {
+ public:
+  BoardRig() : board_(m_), stream_(board_), link_(stream_) {
+    link_.connect();
+    backend_ = std::make_unique<BoardBackend>(link_, m_);
+    EngineOptions o;
+    o.stored.settings = default_settings(m_);
+    o.defaults = o.stored;
+    engine_ = std::make_unique<Engine>(*backend_, o);
+    out_ = engine_->take_output();
+  }
+
+  double now() const { return board_.board_seconds(); }
+  BoardBackend& backend() { return *backend_; }
+  host::BoardLink& link() { return link_; }
+  const std::string& out() const { return out_; }
+  const machine::MachineConfig& machine() const { return m_; }
+
+  // One round of the server loop, then 1 ms of board time.
+  void step() {
+    backend_->tick();
+    engine_->poll();
+    out_ += engine_->take_output();
+    link_.poll(std::chrono::milliseconds(1));
+  }
+  void send(const std::string& bytes) {
+    engine_->receive(bytes);
+    engine_->poll();
+    out_ += engine_->take_output();
+  }
+  Report status() {
+    const size_t n = out_.size();
+    send("?");
+    const size_t lt = out_.find('<', n);
+    EXPECT_NE(lt, std::string::npos) << out_.substr(n);
+    return lt == std::string::npos ? Report{} : parse(out_.substr(lt, out_.find('\n', lt) - lt));
+  }
+  // Steps until pred() or max_s of board time; returns whether pred() held.
+  bool run_until(const std::function<bool()>& pred, double max_s) {
+    const double end = now() + max_s;
+    while (!pred()) {
+      if (now() > end) return false;
+      step();
+    }
+    return true;
+  }
+  bool run_until_state(const std::string& state, double max_s) {
+    return run_until([&] { return status().state == state; }, max_s);
+  }
+  void run_for(double s) {
+    const double end = now() + s;
+    while (now() < end) step();
+  }
+  // Streams lines as a sender counting characters against Grbl's 128-byte
+  // buffer; returns after the last line's answer.
+  void stream(const std::vector<std::string>& lines, double max_s) {
+    size_t sent = 0, answered = 0, from = out_.size();
+    std::vector<size_t> lens;
+    size_t in_buffer = 0;
+    const double end = now() + max_s;
+    while (answered < lines.size() && now() < end) {
+      while (sent < lines.size() && in_buffer + lines[sent].size() + 1 <= kRxBufferSize) {
+        send(lines[sent] + "\n");
+        in_buffer += lines[sent].size() + 1;
+        lens.push_back(lines[sent].size() + 1);
+        ++sent;
+      }
+      step();
+      for (size_t p; (p = out_.find("\r\n", from)) != std::string::npos; from = p + 2) {
+        const std::string reply = out_.substr(from, p - from);
+        if (reply == "ok" || reply.rfind("error:", 0) == 0) in_buffer -= lens[answered++];
+      }
+    }
+    ASSERT_EQ(answered, lines.size()) << "not every line was answered within " << max_s << " s";
+  }
+
+ private:
+  machine::MachineConfig m_ = machine::default_machine();
+  sim::VirtualBoard board_;
+  sim::BoardStream stream_;
+  host::BoardLink link_;
+  std::unique_ptr<BoardBackend> backend_;
+  std::unique_ptr<Engine> engine_;
+  std::string out_;
+};
+
+constexpr double kCount = 1.0 / 400;  // mm per count on the default machine
+
+void expect_at(const Report& r, double x, double y, double z, double tol = 2 * kCount) {
+  EXPECT_NEAR(r.mpos[0], x, tol);
+  EXPECT_NEAR(r.mpos[1], y, tol);
+  EXPECT_NEAR(r.mpos[2], z, tol);
+}
+
+TEST(GrblBoard, StreamedJobRunsOnTimeAndEndsAtItsEndPoint) {
+  BoardRig rig;
+  ASSERT_NE(rig.out().find("Grbl 1.1h"), std::string::npos);
+  EXPECT_EQ(rig.status().state, "Idle");  // at power-up, whatever the servo does within its band
+  std::vector<std::string> lines = {"G21 G90 G17 G94", "G1 Z-0.5 F600"};
+  // 100 short lines of a zig-zag: a stop at each would take far longer than the plan.
+  for (int i = 1; i <= 100; ++i)
+    lines.push_back("G1 X" + std::to_string(0.2 * i) + " Y" + (i % 2 ? "0.3" : "0") + " F3000");
+  lines.insert(lines.end(), {"G2 X30 Y0 I5 J0", "G0 X5 Y5", "G4 P0.1", "N77 G1 Z-0.2 F600"});
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  const machine::MachineConfig m = rig.machine();
+  const double planned = machine::plan_program(text, "job", m, {}).summary.time_s;
+
+  const double t0 = rig.now();
+  rig.stream(lines, 30);
+  EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+  ASSERT_TRUE(rig.run_until_state("Idle", 10));
+  const double took = rig.now() - t0;
+  // Lines planned as they came, with look-ahead over the queue: close to
+  // the whole program's plan, never a stop per line.
+  EXPECT_LT(took, 1.25 * planned + 0.3) << "planned " << planned << " s";
+  EXPECT_GT(took, 0.95 * planned);
+  rig.run_for(0.2);  // the servo settles
+  expect_at(rig.status(), 5, 5, -0.2);
+}
+
+TEST(GrblBoard, HoldStopsAlongThePathAndResumeFinishesTheJob) {
+  BoardRig rig;
+  rig.send("G1 X40 F3000\nG1 Y10\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().mpos[0] > 5; }, 2));
+  EXPECT_EQ(rig.status().state, "Run");
+  const double at_hold = rig.status().mpos[0];
+  rig.send("!");
+  EXPECT_EQ(rig.status().state, "Hold:1");
+  ASSERT_TRUE(rig.run_until_state("Hold:0", 2));
+  const Report held = rig.status();
+  // Within the queued time (0.25 s and the piece running, at most 0.05 s, at
+  // 50 mm/s), the deceleration (50^2 / 2 / 2000 mm) and the servo's lag
+  // (under its 1 mm following-error limit): on the line, short of its end.
+  EXPECT_GT(held.mpos[0], at_hold);
+  EXPECT_LT(held.mpos[0], at_hold + 50 * (0.25 + 0.05) + 0.625 + 1);
+  EXPECT_LT(held.mpos[0], 39);
+  rig.run_for(0.5);
+  EXPECT_NEAR(rig.status().mpos[0], held.mpos[0], 2 * kCount) << "moved while held";
+  EXPECT_EQ(rig.status().state, "Hold:0");
+  rig.send("~");
+  ASSERT_TRUE(rig.run_until_state("Idle", 5));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 40, 10, 0);
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+}
+
+// The senders' job (tests/test_grbl_cncjs.js, --sim): arcs, a zig-zag of
+// short lines and long lines. A hold every `every` s of board time, wherever
+// it falls (a ramp, an arc, a corner), must stop and resume without a fault.
+class GrblBoardHolds : public ::testing::TestWithParam<double> {};
+
+TEST_P(GrblBoardHolds, AnywhereInAJobStopAndResumeWithoutAFault) {
+  const double every = GetParam();
+  BoardRig rig;
+  std::vector<std::string> lines = {"G21 G90 G94",       "G0 X0 Y0 Z0", "G1 X20 F2400",
+                                    "G2 X30 Y10 I0 J10", "G1 Y30",      "G3 X20 Y40 I-10 J0"};
+  for (int i = 0; i < 20; ++i)
+    lines.push_back("G1 X" + std::to_string(20 - 0.1 * (i + 1)) + " Y" + (i % 2 ? "40" : "39.5") + " F3000");
+  lines.insert(lines.end(), {"G1 X0 Y40 F4800", "G1 Y0", "G0 X12.5 Y7.5"});
+  size_t sent = 0;
+  int holds = 0;
+  double next_hold = rig.now() + every;
+  const double end = rig.now() + 30;
+  while (rig.now() < end) {
+    if (sent < lines.size() && rig.backend().ready()) rig.send(lines[sent++] + "\n");
+    rig.step();
+    if (rig.now() >= next_hold && rig.status().state == "Run") {
+      rig.send("!");
+      ASSERT_TRUE(rig.run_until_state("Hold:0", 2)) << "hold " << holds << "\n" << rig.out();
+      rig.send("~");
+      ++holds;
+      next_hold = rig.now() + every;
+    }
+    if (sent == lines.size() && rig.status().state == "Idle") break;
+  }
+  EXPECT_GE(holds, 6);
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.status().state, "Idle");
+  rig.run_for(0.2);
+  expect_at(rig.status(), 12.5, 7.5, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Phases, GrblBoardHolds, ::testing::Values(0.25, 0.33));
+
+TEST(GrblBoard, FeedOverridesChangeTheSpeedPartWay) {
+  BoardRig rig;
+  rig.send("G1 X100 F1200\n");  // 20 mm/s: 5 s
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().mpos[0] > 2; }, 2));
+  EXPECT_NEAR(rig.status().feed, 1200, 12);
+  for (int i = 0; i < 5; ++i) rig.send("\x92");  // -50 %
+  EXPECT_TRUE(rig.run_until([&] { return std::fabs(rig.status().feed - 600) < 6; }, 0.6));
+  const double x = rig.status().mpos[0];
+  EXPECT_LT(x, 20);
+  rig.send("\x90");                              // back to 100 %
+  for (int i = 0; i < 5; ++i) rig.send("\x91");  // +50 %
+  EXPECT_TRUE(rig.run_until([&] { return std::fabs(rig.status().feed - 1800) < 18; }, 0.6));
+  ASSERT_TRUE(rig.run_until_state("Idle", 6));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 100, 0, 0);
+}
+
+TEST(GrblBoard, DwellAnswersAfterItRan) {
+  BoardRig rig;
+  rig.send("G1 X2 F600\n");  // 0.2 s and the ramps
+  const size_t from = rig.out().size();
+  const double t0 = rig.now();
+  rig.send("G4 P0.5\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.out().find("ok", from) != std::string::npos; }, 3));
+  EXPECT_GE(rig.now() - t0, 0.2 + 0.5);
+  EXPECT_LT(rig.now() - t0, 0.2 + 0.5 + 0.3);
+  EXPECT_TRUE(rig.backend().drained());
+  EXPECT_EQ(rig.status().state, "Idle");
+}
+
+TEST(GrblBoard, SpindleAndCoolantAreRecordedInOrder) {
+  BoardRig rig;
+  rig.send("G1 X5 F600\nM3 S1200\nM8\n");
+  EXPECT_EQ(rig.status().rpm, 0);  // not before the move before it has run
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().rpm == 1200; }, 3));
+  EXPECT_GT(rig.status().mpos[0], 5 - 3 * kCount);
+  // Grbl shows A: with the override values, every few reports.
+  EXPECT_TRUE(rig.run_until(
+      [&] { return rig.status().state == "Idle" && rig.out().rfind("A:SF") != std::string::npos; }, 0.5))
+      << rig.out();
+  rig.send("M30\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.out().find("[MSG:Pgm End]") != std::string::npos; }, 2));
+  EXPECT_EQ(rig.status().rpm, 0);
+}
+
+TEST(GrblBoard, BoardFaultIsAnAlarmNamingItAndTheNextLineRearms) {
+  BoardRig rig;
+  rig.send("G1 X1 F600\n");
+  ASSERT_TRUE(rig.run_until_state("Idle", 2));
+  // Nobody talks to the board for 300 ms: its watchdog turns the drives off.
+  rig.link().poll(std::chrono::milliseconds(300));
+  ASSERT_TRUE(rig.run_until([&] { return rig.out().find("ALARM:3") != std::string::npos; }, 1)) << rig.out();
+  EXPECT_NE(rig.out().find("[MSG:Board fault: watchdog]"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.status().state, "Alarm");
+  rig.send("$X\n");
+  rig.send("G1 X3 F600\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().state == "Idle" && rig.status().mpos[0] > 2.9; }, 3))
+      << rig.out();
+  rig.run_for(0.2);
+  expect_at(rig.status(), 3, 0, 0);
+}
+
+TEST(GrblBoard, ProbesAndHomingAreRefusedClearly) {
+  BoardRig rig;
+  rig.send("G38.2 Z-5 F100\n");
+  rig.run_for(0.01);
+  EXPECT_NE(rig.out().find("ALARM:5"), std::string::npos) << rig.out();
+  EXPECT_NE(rig.out().find("[MSG:Probing (G38.x) is not run on the board yet"), std::string::npos)
+      << rig.out();
+  EXPECT_EQ(rig.status().mpos[2], 0);
+  rig.send("$X\n");
+  const size_t from = rig.out().size();
+  rig.send("$H\n");
+  EXPECT_NE(rig.out().find("error:5", from), std::string::npos) << rig.out().substr(from);
+}
+
+TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {
+  BoardRig rig;
+  rig.send("$J=G91 X30 F1800\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().mpos[0] > 3; }, 2));
+  EXPECT_EQ(rig.status().state, "Jog");
+  rig.send("\x85");
+  ASSERT_TRUE(rig.run_until_state("Idle", 2));
+  const double x = rig.status().mpos[0];
+  EXPECT_LT(x, 20);
+  // Soft reset while moving: the interpolator stops at once (ALARM:3, as
+  // Grbl), and after $X the next move runs from where the axes are.
+  rig.send("G1 X60 F3000\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().mpos[0] > x + 5; }, 2));
+  const double before = rig.status().mpos[0];
+  rig.send("\x18");
+  EXPECT_NE(rig.out().find("ALARM:3"), std::string::npos);
+  rig.run_for(0.2);
+  const double stopped = rig.status().mpos[0];
+  EXPECT_LT(stopped, before + 1);  // the servo's overshoot, not the 12 mm queued
+  rig.send("$X\nG1 X10 Y2 F3000\n");
+  ASSERT_TRUE(rig.run_until_state("Idle", 3));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 10, 2, 0);
+  EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
+}
+
+TEST(GrblBoard, WatchdogPeriodIsSetWithinWhatTheRegisterHolds) {
+  const machine::MachineConfig m = machine::default_machine();
+  sim::VirtualBoard board(m);
+  sim::BoardStream stream(board);
+  host::BoardLink link(stream);
+  link.connect();
+  BoardBackend b(link, m, 16, {}, 0.5);
+  EXPECT_EQ(link.read(br::WDOG), uint32_t(0.5 * m.clock_hz));
+  EXPECT_THROW(watchdog_cycles(5, m.clock_hz), host::InputError);
+  EXPECT_THROW(watchdog_cycles(1e-9, m.clock_hz), host::InputError);
+}
+
+}  // namespace
+}  // namespace mc::grbl::test
