@@ -82,10 +82,11 @@ TEST(CliRun, PathFollowsAHeightMapAndRefusesCutsOutsideIt) {
   EXPECT_NE(r.err.find(out + ":4: cut at X25 Y1"), std::string::npos) << r.err;
 }
 
-// A square with rounded corners, 1 mm deep: about 2 s of motion.
+// A square with rounded corners, 1 mm deep, after a dwell: about 2.3 s.
 const char* kJob =
     "G21 G90 G17 G64\n"
     "G1 Z-0.5 F600\n"
+    "G4 P0.3\n"  // a dwell: the queue behind it must not run dry when it ends
     "G1 X8 F3000\n"
     "G3 X10 Y2 I0 J2\n"
     "G1 Y8\n"

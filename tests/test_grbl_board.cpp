@@ -340,16 +340,55 @@ TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {
   EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
 }
 
-TEST(GrblBoard, WatchdogPeriodIsSetWithinWhatTheRegisterHolds) {
+// The default machine's virtual board in this process, on board time, and a
+// link to it.
+struct InProcessBoard {
   const machine::MachineConfig m = machine::default_machine();
-  sim::VirtualBoard board(m);
-  sim::BoardStream stream(board);
-  host::BoardLink link(stream);
-  link.connect();
+  sim::VirtualBoard board{m};
+  sim::BoardStream stream{board};
+  host::BoardLink link{stream};
+  InProcessBoard() { link.connect(); }
+};
+
+TEST(GrblBoard, WatchdogPeriodIsSetWithinWhatTheRegisterHolds) {
+  InProcessBoard ib;
+  const machine::MachineConfig& m = ib.m;
+  host::BoardLink& link = ib.link;
   BoardBackend b(link, m, 16, {}, 0.5);
   EXPECT_EQ(link.read(br::WDOG), uint32_t(0.5 * m.clock_hz));
   EXPECT_THROW(watchdog_cycles(5, m.clock_hz), host::InputError);
   EXPECT_THROW(watchdog_cycles(1e-9, m.clock_hz), host::InputError);
+}
+
+// The streamer keeps queue_ahead_s of planned time queued, of which the
+// piece the board runs counts at most as the longest motion piece: a long
+// dwell must not count, or when it ends the board finds one short ramp
+// piece behind it and runs dry while the host looks away.
+TEST(JobStreamerQueue, KeepsItsTimeQueuedBehindADwell) {
+  InProcessBoard ib;
+  const machine::MachineConfig& m = ib.m;
+  host::BoardLink& link = ib.link;
+  const machine::JobBoard jb = machine::ready_board(link, m, [](const std::string&) {});
+  const host::PlannerConfig cfg = machine::planner_config(m);
+  const machine::Job j =
+      machine::plan_program("G1 X1 F600\nG4 P0.5\nG1 X30 F3000\n", "dwell.nc", m, host::to_mm(jb.at, cfg));
+  host::JobStreamer s(link, cfg, jb.at, 0.25);
+  s.load(j.moves, j.pieces);
+  int polls = 0;
+  while (!(s.current() && s.current()->line == 2) && polls < 100000) {
+    s.poll();
+    ++polls;
+  }
+  ASSERT_TRUE(s.current() && s.current()->line == 2) << "the dwell never ran";
+  for (int k = 0; k < 20; ++k) s.poll();
+  ASSERT_EQ(s.current()->line, 2);
+  EXPECT_GE(s.planned_s() - s.current()->t_end, 0.25 - cfg.max_piece_s - 1e-9);
+  while (!s.drained() && polls < 200000) {
+    s.poll();
+    ++polls;
+  }
+  EXPECT_TRUE(s.drained());
+  EXPECT_EQ(s.underruns(), 0);
 }
 
 }  // namespace

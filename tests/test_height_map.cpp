@@ -64,6 +64,11 @@ TEST(HeightMap, ParsesWhatItFormats) {
   EXPECT_EQ(back.ny, 3);
   EXPECT_EQ(back.x0, -10);
   EXPECT_EQ(back.dy, 20);
+  // The edges read back exactly, whatever the spacing.
+  const HeightMap thirds = grid(7, 2, 5, 5, 190.0 / 6, 140.0 / 6, bed);
+  const HeightMap t = parse_height_map(format_height_map(thirds), "map.toml");
+  EXPECT_EQ(t.x1(), thirds.x1());
+  EXPECT_EQ(t.dy, thirds.dy);
   for (size_t k = 0; k < m.z.size(); ++k) EXPECT_NEAR(back.z[k], m.z[k], 5e-7);
 }
 

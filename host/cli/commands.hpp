@@ -26,5 +26,6 @@ void add_hostloop_command(CLI::App& app);
 void add_gcode_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_serve_command(CLI::App& app);
+void add_level_command(CLI::App& app);
 
 }  // namespace mc::host::cli

@@ -75,6 +75,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_gcode_command(app);
   mc::host::cli::add_run_command(app);
   mc::host::cli::add_serve_command(app);
+  mc::host::cli::add_level_command(app);
 
   // After the commands: subcommands inherit the footer they were created with.
   app.footer("Run 'motionctl COMMAND --help' for the options of a command.\n");

@@ -106,14 +106,26 @@ HeightMap load_height_map(const std::string& path) {
   return parse_height_map(s.str(), path);
 }
 
+namespace {
+// The grid's geometry as the double it is, so that the map's edges read back
+// where they were (heights keep 6 decimals: nanometres).
+std::string exact(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  std::string t = b;
+  if (t.find_first_of(".en") == std::string::npos) t += ".0";  // a TOML float, not an integer
+  return t;
+}
+}  // namespace
+
 std::string format_height_map(const HeightMap& map) {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(6);
   s << "# Bed height map (docs/levelling.md): heights in mm relative to the first point,\n"
     << "# one row per Y from y0_mm up, one value per X from x0_mm up.\n[map]\n"
-    << "x0_mm = " << map.x0 << "\ny0_mm = " << map.y0 << "\ndx_mm = " << map.dx << "\ndy_mm = " << map.dy
-    << "\nheights_mm = [\n";
+    << "x0_mm = " << exact(map.x0) << "\ny0_mm = " << exact(map.y0) << "\ndx_mm = " << exact(map.dx)
+    << "\ndy_mm = " << exact(map.dy) << "\nheights_mm = [\n";
   for (int j = 0; j < map.ny; ++j) {
     s << "  [";
     for (int i = 0; i < map.nx; ++i) s << (i ? ", " : "") << map.at(i, j);
@@ -157,7 +169,7 @@ class Leveler {
   std::string place() const { return (file_.empty() ? "line " : file_ + ":") + std::to_string(line_); }
 
   void require_inside(const Vec3& p) const {
-    if (map_.contains(p[0], p[1], 1e-6)) return;
+    if (map_.contains(p[0], p[1], 1e-3)) return;  // a micron: printed maps and programs round
     const auto mm = [](double v) {
       char b[32];
       std::snprintf(b, sizeof b, "%.3f", v);

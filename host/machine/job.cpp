@@ -49,7 +49,7 @@ ProgramErrors::ProgramErrors(std::vector<mc::gcode::Error> errors)
     : std::runtime_error(list(errors)), errors_(std::move(errors)) {}
 
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m, const Vec3d& start,
-                 const HeightMap* level) {
+                 const HeightMap* level, LevelMethod method) {
   mc::gcode::Options o;
   o.start = start;
   const mc::gcode::ProgramResult prog = mc::gcode::interpret_program(text, name, o);
@@ -58,8 +58,12 @@ Job plan_program(std::string_view text, const std::string& name, const MachineCo
   j.file = name;
   j.cfg = planner_config(m);
   j.lines = prog.lines;
-  const std::vector<mc::gcode::CanonCall> calls =
-      level ? level_calls(prog.calls, start, *level, LevelOptions{j.cfg.arc_tolerance_mm}, name) : prog.calls;
+  std::vector<mc::gcode::CanonCall> calls = prog.calls;
+  if (level) {
+    const LevelOptions lo{j.cfg.arc_tolerance_mm};
+    calls = method == LevelMethod::bilinear ? level_calls(prog.calls, start, *level, lo, name)
+                                            : level_calls_endpoints(prog.calls, start, *level, lo, name);
+  }
   j.moves = mc::host::to_moves(calls, start, j.cfg, name);
   mc::host::plan_speeds(j.moves, j.cfg);
   j.pieces = mc::host::chop(j.moves, j.cfg);

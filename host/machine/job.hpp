@@ -47,10 +47,14 @@ struct Job {
 // G-code errors and InputError ("FILE:line N: ...") for what the machine
 // cannot do (travel, an absent axis, a probe, a cut outside the map); in
 // every case before anything moves.
+// How a map is applied: split per cell and within the tolerance, or only at
+// each move's end points (the source paper's method, kept for comparison).
+enum class LevelMethod { bilinear, end_points };
 Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Vec3d& start,
              const HeightMap* level = nullptr);
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m,
-                 const mc::host::Vec3d& start, const HeightMap* level = nullptr);
+                 const mc::host::Vec3d& start, const HeightMap* level = nullptr,
+                 LevelMethod method = LevelMethod::bilinear);
 
 // A board ready to run a job: every axis of the machine present, gains
 // where the board has none (the machine's, with a note), the drives armed,

@@ -83,8 +83,10 @@ std::string engraving_program(const WorkpieceConfig& w, const HeightMap& map, do
     << "G21 G90 G17 G94\n"
     << "G10 L2 P1 X0 Y0 Z" << mm(surface_z_mm(w, map.x0, map.y0)) << "\nG54\nG0 Z" << mm(kSafeMm) << "\n";
   const auto cut = [&](double xa, double ya, double xb, double yb) {
-    g << "G0 X" << mm(xa) << " Y" << mm(ya) << "\nG1 Z" << mm(-depth_mm) << " F300\nG1 X" << mm(xb) << " Y"
-      << mm(yb) << " F" << mm(feed_mm_min) << "\nG0 Z" << mm(kSafeMm) << "\n";
+    // The dwell lets the Z servo settle from the plunge, which it overshoots
+    // by a few counts: this compares levelling, not plunges.
+    g << "G0 X" << mm(xa) << " Y" << mm(ya) << "\nG1 Z" << mm(-depth_mm) << " F300\nG4 P0.25\nG1 X" << mm(xb)
+      << " Y" << mm(yb) << " F" << mm(feed_mm_min) << "\nG0 Z" << mm(kSafeMm) << "\n";
   };
   for (int j = 0; j < rows; ++j) {
     const double y = map.y0 + (map.y1() - map.y0) * (j + 0.5) / rows;

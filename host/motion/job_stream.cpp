@@ -301,8 +301,12 @@ void JobStreamer::send() {
       continue;
     }
     // Planned time queued: from the start of the first piece not done to
-    // the end of the last one sent.
-    const double from = flight_.empty() ? p.t_end - p.seg.duration : flight_.front().t_start;
+    // the end of the last one sent. Of that first piece at most the longest
+    // motion piece counts: a long dwell must not, or the queue behind it is
+    // one short ramp piece when it ends and the board runs dry.
+    const double from =
+        flight_.empty() ? p.t_end - p.seg.duration
+                        : std::max(flight_.front().t_start, flight_.front().what.t_end - cfg_.max_piece_s);
     if (flight_.size() >= 2 && flight_.back().what.t_end - from >= ahead_s_) break;
     // A batch stops at the planned time too: a hold waits for what is queued.
     std::vector<seg::Words> batch;
