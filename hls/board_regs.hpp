@@ -17,8 +17,8 @@ namespace mc::board {
 // ---- protocol constants -------------------------------------------------
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
-constexpr uint8_t VERSION = 1;
-constexpr int HDR_BYTES = 4;  // SYNC, LEN, SEQ, CMD
+constexpr uint8_t VERSION = 2;  // 2: a frame refused FULL is remembered; its copies get FULL
+constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
 constexpr int SEG_BYTES = 40;          // one interpolator segment (10 words)

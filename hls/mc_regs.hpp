@@ -100,7 +100,7 @@ class McRegs {
     uint8_t bi = 0, rbi = 0;
     bool rv = false;
     uint8_t last_seq = 0;
-    bool last_valid = false;
+    bool last_valid = false, last_full = false;
     bool rep_pend = false, rep_sending = false, tlm_pend = false, tlm_sending = false;
     bool val_shadow = false, val_direct = false;
     uint8_t set_n = 0;               // 2 bits
@@ -327,6 +327,7 @@ class McRegs {
     if (in.rst) {
       n.xs = X_IDLE;
       n.last_valid = false;
+      n.last_full = false;
       n.rep_pend = false;
     } else {
       if (in.frame && (o.xs != X_IDLE || rep_busy)) n.drop_busy = true;
@@ -360,6 +361,11 @@ class McRegs {
             n.addr = br::IP_STAT;
           }
           if (chk == bp::ST_BAD_LEN || chk == bp::ST_BAD_CMD || chk == bp::ST_FULL) {
+            if (chk == bp::ST_FULL) {  // its copies get FULL too, never a later evaluation
+              n.last_seq = o.f_seq;
+              n.last_valid = true;
+              n.last_full = true;
+            }
             n.cnt_nak_inc = true;
             n.val_direct = true;
             n.data = 0;
@@ -386,6 +392,7 @@ class McRegs {
           if (o.f_cmd == bp::CMD_SEG) {
             n.last_seq = o.f_seq;
             n.last_valid = true;
+            n.last_full = false;
             n.xs = X_RD;
           } else if (o.f_cmd == bp::CMD_READ ? !rd_ok(addr) : !wr_ok(addr)) {
             n.status = bp::ST_BAD_REG;
@@ -400,6 +407,7 @@ class McRegs {
             } else {
               n.last_seq = o.f_seq;
               n.last_valid = true;
+              n.last_full = false;
             }
             if (o.f_cmd == bp::CMD_WRITE) {
               n.val_direct = true;
@@ -703,7 +711,7 @@ class McRegs {
       case bp::CMD_SEG: {
         const bool len_ok = r.f_len != 0 && r.f_len % bp::SEG_BYTES == 0 && r.f_len <= bp::MAX_LEN;
         if (!len_ok) return bp::ST_BAD_LEN;
-        if (dup) return bp::ST_DUP;
+        if (dup) return r.last_full ? bp::ST_FULL : bp::ST_DUP;
         const uint32_t room_need = (uint32_t(r.f_len) >> 2) + (in.seg_count & (2 * DEPTH - 1));
         return room_need > DEPTH ? bp::ST_FULL : bp::ST_OK;
       }

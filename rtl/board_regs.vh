@@ -2,7 +2,7 @@
 // Link protocol constants (P_), register addresses (R_; R_AX_ are offsets within an
 // axis's block) and register fields (B_). docs/protocol.md explains them.
 localparam [7:0] P_SYNC = 8'hA5;
-localparam [7:0] P_VERSION = 8'h01;
+localparam [7:0] P_VERSION = 8'h02;
 localparam integer P_HDR_BYTES = 4;
 localparam integer P_CRC_BYTES = 2;
 localparam integer P_MAX_LEN = 240;

@@ -12,7 +12,10 @@
 //   then goes out through link_tx.
 // - A frame with the SEQ of the last applied one is not applied again; it is
 //   answered with ST_DUP (a read is answered with the value as it is now).
-//   PING forgets the last SEQ.
+//   A segment frame refused FULL counts as the last one too, and its copies
+//   are refused FULL without a second look at the queue: every copy of a
+//   frame gets the answer the first copy got, so a late reply to any copy
+//   tells the host the truth. PING forgets the last SEQ.
 // - After every PID sample (done_i) a walker reads TLM_HDR and each axis's
 //   POS, CMD, ERR, OUT and FOLLOW through the read path. It checks each
 //   axis's following error |FOLLOW| against FERR (strobing ferr_o), and every
@@ -304,6 +307,7 @@ module mc_regs #(
   reg        rv;
   reg  [7:0] last_seq;
   reg        last_valid;
+  reg        last_full;  // the frame of last_seq was refused FULL: so are its copies
   reg        rep_pend, rep_sending, tlm_pend, tlm_sending;
   reg        w_act;  // the walker is issuing reads
   wire       w_wr;  // the walker writes a telemetry word this clock
@@ -347,7 +351,7 @@ module mc_regs #(
       P_CMD_WRITE: if (f_len != 8'd6) chk = P_ST_BAD_LEN;
       P_CMD_SEG:
       if (!seg_len_ok) chk = P_ST_BAD_LEN;
-      else if (dup) chk = P_ST_DUP;
+      else if (dup) chk = last_full ? P_ST_FULL : P_ST_DUP;
       else if (room_need > DEPTH) chk = P_ST_FULL;
       default:     chk = P_ST_BAD_CMD;
     endcase
@@ -493,6 +497,7 @@ module mc_regs #(
     if (rst) begin
       xs         <= X_IDLE;
       last_valid <= 1'b0;
+      last_full  <= 1'b0;
       rep_pend   <= 1'b0;
     end else begin
       if (frame_i && (xs != X_IDLE || rep_busy)) drop_busy <= 1'b1;
@@ -523,6 +528,11 @@ module mc_regs #(
             addr <= R_IP_STAT;
           end
           if (chk == P_ST_BAD_LEN || chk == P_ST_BAD_CMD || chk == P_ST_FULL) begin
+            if (chk == P_ST_FULL) begin  // its copies get FULL too, never a later evaluation
+              last_seq   <= f_seq;
+              last_valid <= 1'b1;
+              last_full  <= 1'b1;
+            end
             cnt_nak_inc <= 1'b1;
             val_direct  <= 1'b1;
             data        <= 32'd0;
@@ -549,6 +559,7 @@ module mc_regs #(
           if (f_cmd == P_CMD_SEG) begin
             last_seq   <= f_seq;
             last_valid <= 1'b1;
+            last_full  <= 1'b0;
             xs         <= X_RD;
           end else if (f_cmd == P_CMD_READ ? !rd_ok : !wr_ok) begin
             status      <= P_ST_BAD_REG;
@@ -563,6 +574,7 @@ module mc_regs #(
             end else begin
               last_seq   <= f_seq;
               last_valid <= 1'b1;
+              last_full  <= 1'b0;
             end
             if (f_cmd == P_CMD_WRITE) begin
               val_direct <= 1'b1;

@@ -224,6 +224,45 @@ TEST(BoardRtl, DuplicateFrameIsAnsweredButNotAppliedTwice) {
   EXPECT_EQ(tb.transact(w)->status, bp::ST_OK);
 }
 
+// A segment frame refused FULL stays refused: a copy of it (a retransmission
+// whose reply the host may read late, instead of the first one's) gets FULL
+// even when the queue has room by then, so that no copy is queued behind the
+// host's back; the same segments in a new request are queued.
+TEST(BoardRtl, CopiesOfAFullFrameAreRefusedFullToo) {
+  BoardTb tb;
+  tb.write(br::CTRL, 1u << bb::C_ARM);  // dwells run only while armed
+  const std::vector<seg::Words> six(6, seg::pack(host::plan_dwell({0, 0, 0}, 5e-3).seg));
+  for (int i = 0; i < 30; ++i) {
+    const auto req = hp::segments(tb.next_seq(), six);
+    const auto r = tb.transact(req);
+    ASSERT_TRUE(r);
+    if (r->status != bp::ST_FULL) continue;
+    const uint32_t cmd0 = tb.read(br::LINK_CMD);
+    // A read moved the last SEQ: refuse the frame again, then wait, with no
+    // frame on the line, until six dwells have run and left room for it.
+    const auto req2 = hp::segments(tb.next_seq(), six);
+    const auto r2 = tb.transact(req2);
+    ASSERT_TRUE(r2);
+    ASSERT_EQ(r2->status, bp::ST_FULL);
+    tb.run(long(12e6 * 40e-3));
+    const auto copy = tb.transact(req2);
+    ASSERT_TRUE(copy);
+    EXPECT_EQ(copy->status, bp::ST_FULL) << "a copy of a refused frame is refused, room or not";
+    const uint32_t queued = tb.read(br::IP_STAT) & 0x3FF;
+    EXPECT_LE(queued + 6u * seg::SEG_WORDS, 512u) << "the queue had room for the copy";
+    const uint32_t cmd1 = tb.read(br::LINK_CMD);
+    EXPECT_EQ((cmd1 & 0xFFFF) - (cmd0 & 0xFFFF), 2u) << "the refusal and its copy count as refused";
+    EXPECT_EQ(cmd1 >> 16, cmd0 >> 16) << "not as duplicates";
+    // The same segments in a new request: queued.
+    const auto fresh = tb.transact(hp::segments(tb.next_seq(), six));
+    ASSERT_TRUE(fresh);
+    EXPECT_EQ(fresh->status, bp::ST_OK);
+    EXPECT_GT(tb.read(br::IP_STAT) & 0x3FF, queued) << "queued (a dwell may have ended meanwhile)";
+    return;
+  }
+  FAIL() << "the queue never filled";
+}
+
 // Arms the board with an override drive on axis 0, so its EN pin shows
 // whether the drive is allowed.
 void arm_with_drive(BoardTb& tb) {

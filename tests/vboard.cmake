@@ -32,3 +32,10 @@ foreach(t test_cli_board test_cli_step)
   gtest_discover_tests(${t} TEST_PREFIX "Rtl." PROPERTIES LABELS system ENVIRONMENT MC_VBOARD_ENGINE=rtl
     DISCOVERY_TIMEOUT 60)
 endforeach()
+
+# Segments counted where they land (the board's queue, tapped): no frame
+# queued twice by late replies and a full queue, and issue 18's soak, short
+# (30 s of board time; `make soak` runs the hour).
+mc_gtest(test_link_soak system TIMEOUT 600 test_link_soak.cpp)
+target_link_libraries(test_link_soak PRIVATE mc_motion mc_vboard)
+target_compile_definitions(test_link_soak PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

@@ -1,5 +1,6 @@
 // motionctl sim serve | stop: the virtual board (sim/virtual_board.hpp) on a
-// pseudo-terminal, in the foreground, and stopping the registered one.
+// pseudo-terminal, in the foreground, and stopping the registered one
+// (sim soak: cmd_soak.cpp).
 #include <signal.h>
 #include <unistd.h>
 
@@ -163,7 +164,8 @@ void stop() {
 }  // namespace
 
 void add_sim_command(CLI::App& app) {
-  CLI::App* sim = app.add_subcommand("sim", "The virtual board: serve it on a pseudo-terminal, or stop it");
+  CLI::App* sim = app.add_subcommand(
+      "sim", "The virtual board: serve it on a pseudo-terminal, stop it, or soak its link");
   sim->require_subcommand(1);
   auto o = std::make_shared<ServeOptions>();
   CLI::App* srv = sim->add_subcommand(
@@ -199,6 +201,7 @@ void add_sim_command(CLI::App& app) {
       "Sends SIGTERM and waits up to 10 s for the server to exit; if it has not, SIGKILL. Prints which,\n"
       "and exits 1 when the process is still running after both.");
   st->callback([] { stop(); });
+  add_soak_command(*sim);
 }
 
 }  // namespace mc::host::cli

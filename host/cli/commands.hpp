@@ -17,6 +17,8 @@ void add_plant_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_cosim_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
+// motionctl sim soak (cmd_soak.cpp), under the sim command.
+void add_soak_command(CLI::App& sim);
 void add_status_command(CLI::App& app);
 void add_board_commands(CLI::App& app);
 void add_gains_commands(CLI::App& app);

@@ -220,19 +220,11 @@ void BoardLink::write_verify(uint16_t addr, uint32_t value, uint32_t mask) {
 }
 
 bool BoardLink::segments(const std::vector<seg::Words>& segs) {
-  proto::Frame req = proto::segments(0, segs);
-  req.seq = seq_.next();
-  uint64_t tries = c_.retransmits;
-  proto::Reply r = exchange(req);
-  // FULL is a refusal, so the board would still apply a later copy of the
-  // same frame. After a retransmission the FULL may answer an earlier copy
-  // while a later one found room and was queued: taking it at its word
-  // sends those segments twice. Ask again with the same SEQ until an answer
-  // comes without a retransmission: DUP then means queued, FULL means not.
-  while (r.status == bp::ST_FULL && c_.retransmits != tries) {
-    tries = c_.retransmits;
-    r = exchange(req);
-  }
+  // The board answers every copy of a frame as it answered the first copy
+  // it evaluated (protocol version 2): FULL to any copy means that no copy
+  // was queued or ever will be, DUP or OK that one copy was, once.
+  const proto::Frame req = proto::segments(0, segs);
+  const proto::Reply r = transact(req);
   if (r.status == bp::ST_FULL) return false;
   check(r, req);
   return true;

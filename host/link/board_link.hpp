@@ -4,7 +4,9 @@
 // Each request gets a new SEQ; when its reply does not come within the
 // timeout the very same frame goes out again. The board applies a frame at
 // most once and answers a repeat with DUP, so a DUP to our pending request
-// means "done": nothing is lost and nothing applied twice. The timeout
+// means "done": nothing is lost and nothing applied twice. A segment frame
+// refused FULL stays refused: its copies get FULL too, so whichever copy a
+// late reply answers, it tells the truth. The timeout
 // follows the measured round trip (srtt + 4 rttvar, doubled per retry up to 4x).
 // After max_tries the link gives up with "board at PORT does not answer
 // after N tries"; when what came back was bytes without a single valid
@@ -67,7 +69,8 @@ class BoardLink {
   // Writes, reads back, and throws BoardError when (read & mask) differs.
   void write_verify(uint16_t addr, uint32_t value, uint32_t mask = 0xFFFFFFFFu);
   // Queues 1..6 segments; returns false when the queue lacked room (FULL:
-  // nothing queued; try again later), true when queued.
+  // nothing queued, not even by a retransmitted copy; try again later),
+  // true when queued (once).
   bool segments(const std::vector<seg::Words>& segs);
 
   // Reads what arrives within `wait` without sending anything, queuing

@@ -6,8 +6,10 @@
 // Retransmission contract: a request gets a fresh sequence number (SeqGen);
 // after a timeout the host sends the very same frame again. The board applies
 // a frame at most once (it remembers the last applied SEQ) and answers a
-// repeat with ST_DUP, which means "already done". A PING starts a session: it
-// is never a duplicate and makes the board forget the last SEQ.
+// repeat with ST_DUP, which means "already done". A segment frame refused
+// ST_FULL is remembered too: its repeats get ST_FULL, so no copy of it is
+// ever queued. A PING starts a session: it is never a duplicate and makes
+// the board forget the last SEQ.
 #pragma once
 
 #include <cstddef>

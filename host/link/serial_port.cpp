@@ -115,19 +115,20 @@ size_t SerialPort::read(uint8_t* p, size_t n, std::chrono::milliseconds timeout)
 // ---------------------------------------------------------------------------
 
 FaultInjector::FaultInjector(ByteStream& inner, double flip_rate, double drop_rate, uint32_t seed)
-    : inner_(inner), flip_(flip_rate), drop_(drop_rate), rng_(seed) {}
+    : inner_(inner), flip_(flip_rate), drop_(drop_rate), out_(seed), in_(seed ^ 0x9E3779B9u) {}
 
-size_t FaultInjector::corrupt(uint8_t* p, size_t n) {
+size_t FaultInjector::corrupt(Way& w, uint8_t* p, size_t n) {
   size_t kept = 0;
+  w.n.bytes += n;
   for (size_t i = 0; i < n; ++i) {
-    if (u_(rng_) < drop_) {
-      ++dropped_;
+    if (u_(w.rng) < drop_) {
+      ++w.n.dropped;
       continue;
     }
     uint8_t b = p[i];
-    if (u_(rng_) < flip_) {
-      b ^= uint8_t(1u << (rng_() % 8));
-      ++flipped_;
+    if (u_(w.rng) < flip_) {
+      b ^= uint8_t(1u << (w.rng() % 8));
+      ++w.n.flipped;
     }
     p[kept++] = b;
   }
@@ -136,12 +137,12 @@ size_t FaultInjector::corrupt(uint8_t* p, size_t n) {
 
 void FaultInjector::write(const uint8_t* p, size_t n) {
   std::vector<uint8_t> b(p, p + n);
-  const size_t k = corrupt(b.data(), n);
+  const size_t k = corrupt(out_, b.data(), n);
   if (k > 0) inner_.write(b.data(), k);
 }
 
 size_t FaultInjector::read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) {
-  return corrupt(p, inner_.read(p, n, timeout));
+  return corrupt(in_, p, inner_.read(p, n, timeout));
 }
 
 }  // namespace mc::host

@@ -59,23 +59,39 @@ class SerialPort final : public ByteStream {
 
 // Wraps a stream and, for each byte in either direction, flips a random bit
 // of it with probability flip_rate and drops it with probability drop_rate.
+// Each direction draws from its own generator (seeded from `seed`), so the
+// faults of one direction depend only on the bytes that went that way: over
+// a deterministic stream (the in-process virtual board) a run repeats exactly.
 class FaultInjector final : public ByteStream {
  public:
   FaultInjector(ByteStream& inner, double flip_rate, double drop_rate, uint32_t seed = 1);
   void write(const uint8_t* p, size_t n) override;
   size_t read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) override;
   std::string name() const override { return inner_.name(); }
-  uint64_t flipped() const { return flipped_; }
-  uint64_t dropped() const { return dropped_; }
+  std::chrono::steady_clock::time_point now() const override { return inner_.now(); }
+
+  // What happened to the bytes of one direction.
+  struct Counts {
+    uint64_t bytes = 0;  // offered to the injector
+    uint64_t flipped = 0, dropped = 0;
+  };
+  const Counts& to_device() const { return out_.n; }   // written (host to board)
+  const Counts& from_device() const { return in_.n; }  // read (board to host)
+  uint64_t flipped() const { return out_.n.flipped + in_.n.flipped; }
+  uint64_t dropped() const { return out_.n.dropped + in_.n.dropped; }
 
  private:
+  struct Way {
+    explicit Way(uint32_t seed) : rng(seed) {}
+    std::mt19937 rng;
+    Counts n;
+  };
   // Applies the faults in place; returns the bytes kept.
-  size_t corrupt(uint8_t* p, size_t n);
+  size_t corrupt(Way& w, uint8_t* p, size_t n);
   ByteStream& inner_;
   double flip_, drop_;
-  std::mt19937 rng_;
+  Way out_, in_;
   std::uniform_real_distribution<double> u_{0.0, 1.0};
-  uint64_t flipped_ = 0, dropped_ = 0;
 };
 
 }  // namespace mc::host

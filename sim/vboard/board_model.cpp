@@ -1,6 +1,7 @@
 #include "sim/vboard/board_model.hpp"
 
 #include "Vmotioncore_icebreaker.h"
+#include "Vmotioncore_icebreaker___024root.h"
 #include "verilated.h"
 
 namespace mc::sim {
@@ -23,6 +24,9 @@ class TwinBoard final : public BoardModel {
     }
     b_.step(p);
     ++stepped_;
+    // seg_wr_o and the word it writes, registered: the queue takes them at the next edge.
+    const auto& regs = b_.u_board.u_regs;
+    if (seg_tap_ && regs.r.seg_wr_o) seg_tap_->push_back(regs.data_o());
     for (int a = 0; a < kBoardAxes; ++a)
       if (b_.en(a) && b_.pwm(a)) drive[a] += b_.dir(a) ? -1 : 1;
     return 1;
@@ -76,6 +80,9 @@ class RtlBoard final : public BoardModel {
     t.CLK = 0;
     t.eval();
     ++stepped_;
+    // The executor's queue write and its word (mc_regs' seg_wr_o, seg_wdata_o = data).
+    if (seg_tap_ && t.rootp->motioncore_icebreaker__DOT__u_board__DOT__seg_wr)
+      seg_tap_->push_back(t.rootp->motioncore_icebreaker__DOT__u_board__DOT__u_regs__DOT__data);
     for (int a = 0; a < kBoardAxes; ++a)
       if (*drv_[a].en && *drv_[a].pwm) drive[a] += *drv_[a].dir ? -1 : 1;
     return 1;

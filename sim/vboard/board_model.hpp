@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "hls/motioncore_icebreaker.hpp"
 #include "sim/vboard/virtual_board.hpp"
@@ -39,9 +40,14 @@ class BoardModel {
   virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/) {}
   // Clocks stepped one by one so far (the rest were skipped).
   uint64_t stepped() const { return stepped_; }
+  // Appends to *words every word the command executor writes into the
+  // segment queue (nullptr: off). A write is a stepped clock, never a
+  // skipped one, so the tap sees each word once, in order.
+  void tap_segments(std::vector<uint32_t>* words) { seg_tap_ = words; }
 
  protected:
   uint64_t stepped_ = 0;
+  std::vector<uint32_t>* seg_tap_ = nullptr;
 };
 
 // seed != 0: the RTL's random power-up state, seeded (the twin powers up

@@ -245,6 +245,9 @@ bool VirtualBoard::drive_enabled(int axis) const {
 int VirtualBoard::configured_axes() const {
   return impl_->naxes;
 }
+void VirtualBoard::tap_segments(std::vector<uint32_t>* words) {
+  impl_->board->tap_segments(words);
+}
 
 // ---------------------------------------------------------------------------
 

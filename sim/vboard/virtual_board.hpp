@@ -79,6 +79,10 @@ class VirtualBoard {
   double position_m(int axis) const;
   bool drive_enabled(int axis) const;
   int configured_axes() const;
+  // For link checks: appends to *words every 32-bit word the board writes
+  // into its segment queue, in order, as it writes it (10 per segment,
+  // hls/interp_seg.hpp); nullptr stops. Both engines.
+  void tap_segments(std::vector<uint32_t>* words);
 
  private:
   struct Impl;
