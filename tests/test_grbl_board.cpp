@@ -10,6 +10,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <regex>
@@ -338,6 +340,67 @@ TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {
   rig.run_for(0.2);
   expect_at(rig.status(), 10, 2, 0);
   EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
+}
+
+// The stress test of the line protocol on the board: 10,000 incremental
+// lines (G91, distinct steps, so that a line lost or doubled moves the end
+// point) streamed as fast as character counting allows, a status query
+// every 10 ms of board time answered at once, Ln never going back (nothing
+// reordered), and the machine ending where the sum of the steps puts it.
+TEST(GrblBoard, TenThousandLinesStreamWithNoneLostDoubledOrReordered) {
+  BoardRig rig;
+  constexpr int kLines = 10000;
+  std::vector<std::string> lines;
+  int64_t sum_x = 0, sum_y = 0;  // counts
+  for (int n = 1; n <= kLines; ++n) {
+    // Counts: 1..7 forward, and a count across every 50th line (a straight
+    // path runs at the look-ahead's speed, not a stop per corner).
+    const int dx = 1 + n % 7, dy = n % 50 == 0 ? (n % 100 == 0 ? 1 : -1) : 0;
+    sum_x += dx;
+    sum_y += dy;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "N%d G91 G1 X%.4f Y%.4f F3000", n, dx * kCount, dy * kCount);
+    lines.emplace_back(buf);
+  }
+  size_t sent = 0, answered = 0, from = rig.out().size(), in_buffer = 0;
+  std::deque<size_t> lens;
+  int last_ln = 0, reports = 0;
+  const double t0 = rig.now();
+  double next_query = t0;
+  const double end = rig.now() + 600;
+  while (answered < lines.size() && rig.now() < end) {
+    while (sent < lines.size() && in_buffer + lines[sent].size() + 1 <= kRxBufferSize) {
+      rig.send(lines[sent] + "\n");
+      in_buffer += lines[sent].size() + 1;
+      lens.push_back(lines[sent].size() + 1);
+      ++sent;
+    }
+    if (rig.now() >= next_query) {
+      const Report r = rig.status();  // answered in the same call: no board time passes
+      ASSERT_FALSE(r.state.empty());
+      ASSERT_GE(r.ln, last_ln) << "Ln went back: a line ran out of order";
+      last_ln = r.ln;
+      ++reports;
+      next_query += 0.01;
+    }
+    rig.step();
+    for (size_t p; (p = rig.out().find("\r\n", from)) != std::string::npos; from = p + 2) {
+      const std::string reply = rig.out().substr(from, p - from);
+      if (reply.empty() || reply[0] == '<') continue;
+      ASSERT_EQ(reply, "ok") << "line " << answered + 1;
+      in_buffer -= lens.front();
+      lens.pop_front();
+      ++answered;
+    }
+  }
+  ASSERT_EQ(answered, lines.size());
+  ASSERT_TRUE(rig.run_until_state("Idle", 30));
+  rig.run_for(0.2);
+  expect_at(rig.status(), double(sum_x) * kCount, double(sum_y) * kCount, 0);
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos);
+  EXPECT_GT(reports, 100);
+  std::printf("streamed %d lines in %.2f s of board time, %d status reports\n", kLines, rig.now() - t0,
+              reports);
 }
 
 // The default machine's virtual board in this process, on board time, and a
