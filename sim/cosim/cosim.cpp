@@ -802,7 +802,7 @@ struct Writer {
   template <typename T>
   void vec(const std::vector<T>& v) {
     pod(uint64_t(v.size()));
-    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    if (!v.empty()) b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
   }
 };
 struct Reader {
@@ -830,6 +830,7 @@ struct Reader {
     pod(n);
     need(n * sizeof(T));
     v.resize(n);
+    if (n == 0) return;  // an empty vector's data() may be null, which memcpy may not take
     std::memcpy(v.data(), b.data() + at, n * sizeof(T));
     at += n * sizeof(T);
   }
