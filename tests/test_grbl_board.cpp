@@ -54,10 +54,19 @@ Report parse(const std::string& r) {
   return p;
 }
 
+// The default machine's virtual board in this process, on board time, and a
+// link to it.
+struct InProcessBoard {
+  const machine::MachineConfig m = machine::default_machine();
+  sim::VirtualBoard board{m};
+  sim::BoardStream stream{board};
+  host::BoardLink link{stream};
+  InProcessBoard() { link.connect(); }
+};
+
 class BoardRig {
  public:
-  BoardRig() : board_(m_), stream_(board_), link_(stream_) {
-    link_.connect();
+  BoardRig() {
     backend_ = std::make_unique<BoardBackend>(link_, m_);
     EngineOptions o;
     o.stored.settings = default_settings(m_);
@@ -131,10 +140,10 @@ class BoardRig {
   }
 
  private:
-  machine::MachineConfig m_ = machine::default_machine();
-  sim::VirtualBoard board_;
-  sim::BoardStream stream_;
-  host::BoardLink link_;
+  InProcessBoard ib_;
+  const machine::MachineConfig& m_ = ib_.m;
+  sim::VirtualBoard& board_ = ib_.board;
+  host::BoardLink& link_ = ib_.link;
   std::unique_ptr<BoardBackend> backend_;
   std::unique_ptr<Engine> engine_;
   std::string out_;
@@ -402,16 +411,6 @@ TEST(GrblBoard, TenThousandLinesStreamWithNoneLostDoubledOrReordered) {
   std::printf("streamed %d lines in %.2f s of board time, %d status reports\n", kLines, rig.now() - t0,
               reports);
 }
-
-// The default machine's virtual board in this process, on board time, and a
-// link to it.
-struct InProcessBoard {
-  const machine::MachineConfig m = machine::default_machine();
-  sim::VirtualBoard board{m};
-  sim::BoardStream stream{board};
-  host::BoardLink link{stream};
-  InProcessBoard() { link.connect(); }
-};
 
 TEST(GrblBoard, WatchdogPeriodIsSetWithinWhatTheRegisterHolds) {
   InProcessBoard ib;

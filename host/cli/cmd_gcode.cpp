@@ -2,13 +2,13 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
 
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -131,14 +131,10 @@ void path(const GcodeOptions& o) {
 
 void plot(const GcodeOptions& o) {
   if (o.out.empty()) throw InputError("-o", "(none)", "an output file, e.g. -o path.png");
+  require_writable_file(o.out, "-o");
   const auto m = machine();
   const Vec3d start = parse_start(o.start);
   const mc::machine::Job j = plan(o, m, start);
-  // Check the output is writable before gnuplot runs.
-  {
-    std::ofstream probe(o.out, std::ios::app);
-    if (!probe) throw InputError("-o", quote(o.out), "a writable file", "cannot write");
-  }
   plot_xy(o.out, o.file + ": tool path (machine mm), rapids dashed",
           {{"feed", moves_xy(j.moves, false), "lines lw 1.5 lc rgb '#1f77b4'"},
            {"rapid", moves_xy(j.moves, true), "lines dt 2 lc rgb '#d62728'"}});

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/cli/board_cli.hpp"
 #include "host/cli/commands.hpp"
@@ -30,19 +31,13 @@ void parse_grid(const std::string& text, int& nx, int& ny) {
   ny = b;
 }
 
-void writable(const char* opt, const std::string& path) {
-  if (path.empty()) return;
-  std::ofstream probe(path, std::ios::app);
-  if (!probe) throw InputError(opt, quote(path), "a writable file", "cannot write");
-}
-
 void compare(CompareOptions o) {
   if (!global_options().sim)
     throw InputError("level compare", global_options().port.empty() ? "(no board)" : "--port",
                      "--sim: it measures against the machine TOML's [workpiece], the virtual board's plant");
   parse_grid(o.grid, o.c.nx, o.c.ny);
-  writable("--map", o.map_out);
-  writable("--program", o.program_out);
+  if (!o.map_out.empty()) require_writable_file(o.map_out, "--map");
+  if (!o.program_out.empty()) require_writable_file(o.program_out, "--program");
   const auto m = machine();
   Board b = open_board();
   const mc::machine::LevelComparison r = mc::machine::compare_levelling(*b.link, m, o.c, note);

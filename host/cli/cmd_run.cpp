@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 
+#include "host/base/checks.hpp"
 #include "host/base/errors.hpp"
 #include "host/base/units.hpp"
 #include "host/cli/board_cli.hpp"
@@ -117,11 +118,8 @@ void run_job(const RunOptions& o) {
   if (!checked.ok()) throw mc::machine::ProgramErrors(checked.errors);
   std::optional<mc::machine::HeightMap> level;
   if (!o.level.empty()) level = mc::machine::load_height_map(o.level);
-  for (const auto& [opt, path] : {std::pair{"--plot", o.plot}, std::pair{"--csv", o.csv}}) {
-    if (path.empty()) continue;
-    std::ofstream probe(path, std::ios::app);
-    if (!probe) throw InputError(opt, quote(path), "a writable file", "cannot write");
-  }
+  for (const auto& [opt, path] : {std::pair{"--plot", o.plot}, std::pair{"--csv", o.csv}})
+    if (!path.empty()) require_writable_file(path, opt);
   Board b = open_board();
   BoardLink& l = *b.link;
   const mc::machine::JobBoard jb = mc::machine::ready_board(l, m, note);

@@ -29,13 +29,21 @@ bool HeightMap::contains(double x, double y, double eps) const {
   return x >= x0 - eps && x <= x1() + eps && y >= y0 - eps && y <= y1() + eps;
 }
 
-double HeightMap::height(double x, double y) const {
+HeightMap::Cell HeightMap::cell(double x, double y) const {
   const double u = std::clamp((x - x0) / dx, 0.0, double(nx - 1));
   const double v = std::clamp((y - y0) / dy, 0.0, double(ny - 1));
   const int i = std::min(int(u), nx - 2), j = std::min(int(v), ny - 2);
-  const double fu = u - i, fv = v - j;
-  return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
-         fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
+  return {i, j, u - i, v - j};
+}
+
+double HeightMap::height(double x, double y) const {
+  const Cell c = cell(x, y);
+  return (1 - c.fv) * ((1 - c.fu) * at(c.i, c.j) + c.fu * at(c.i + 1, c.j)) +
+         c.fv * ((1 - c.fu) * at(c.i, c.j + 1) + c.fu * at(c.i + 1, c.j + 1));
+}
+
+double HeightMap::twist(int i, int j) const {
+  return (at(i + 1, j + 1) - at(i + 1, j) - at(i, j + 1) + at(i, j)) / (dx * dy);
 }
 
 HeightMap parse_height_map(std::string_view text, const std::string& source) {
@@ -170,14 +178,7 @@ class Leveler {
 
   void require_inside(const Vec3& p) const {
     if (map_.contains(p[0], p[1], 1e-3)) return;  // a micron: printed maps and programs round
-    const auto mm = [](double v) {
-      char b[32];
-      std::snprintf(b, sizeof b, "%.3f", v);
-      std::string t = b;  // 12.500 -> 12.5, 25.000 -> 25
-      while (t.back() == '0') t.pop_back();
-      if (t.back() == '.') t.pop_back();
-      return t;
-    };
+    const auto mm = [](double v) { return host::format_number(std::round(v * 1e3) / 1e3); };  // to a micron
     throw InputError(place() + ": cut at X" + mm(p[0]) + " Y" + mm(p[1]), "outside the height map",
                      "X " + host::format_number(map_.x0) + ".." + host::format_number(map_.x1()) + ", Y " +
                          host::format_number(map_.y0) + ".." + host::format_number(map_.y1()),
@@ -262,11 +263,8 @@ class Leveler {
       // Along a straight piece in one cell the bilinear height is quadratic
       // in t, c t^2 + ...: the chord is off it by at most |c| / 4.
       const Vec3 mid = at((t0 + t1) / 2);
-      const double u = std::clamp((mid[0] - map_.x0) / map_.dx, 0.0, double(map_.nx - 1));
-      const double v = std::clamp((mid[1] - map_.y0) / map_.dy, 0.0, double(map_.ny - 1));
-      const int i = std::min(int(u), map_.nx - 2), j = std::min(int(v), map_.ny - 2);
-      const double twist = (map_.at(i + 1, j + 1) - map_.at(i + 1, j) - map_.at(i, j + 1) + map_.at(i, j)) /
-                           (map_.dx * map_.dy);
+      const HeightMap::Cell in = map_.cell(mid[0], mid[1]);
+      const double twist = map_.twist(in.i, in.j);
       const double c = twist * (b[0] - a[0]) * (t1 - t0) * (b[1] - a[1]) * (t1 - t0);
       const int n = std::max(1, int(std::ceil(std::sqrt(std::abs(c) / (4 * tol_)))));
       for (int q = 1; q <= n; ++q) emit(q == n && k + 1 == ts.size() ? b : at(t0 + (t1 - t0) * q / n));

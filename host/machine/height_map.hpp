@@ -40,8 +40,18 @@ struct HeightMap {
   double x1() const { return x0 + dx * (nx - 1); }
   double y1() const { return y0 + dy * (ny - 1); }
   double at(int i, int j) const { return z[size_t(j) * size_t(nx) + size_t(i)]; }
+  // The cell holding (x, y), or the nearest one outside the area: its
+  // corner (i, j) and where in it the point lies (0..1 each way).
+  struct Cell {
+    int i, j;
+    double fu, fv;
+  };
+  Cell cell(double x, double y) const;
   // Bilinear inside the area; outside, the value at the nearest point of it.
   double height(double x, double y) const;
+  // d2z/dxdy of the bilinear surface in a cell (mm^-1): 0 when its four
+  // corners lie on one plane.
+  double twist(int i, int j) const;
   // Inside the area, with a margin of `eps` mm.
   bool contains(double x, double y, double eps = 1e-9) const;
 };

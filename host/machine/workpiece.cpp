@@ -58,7 +58,8 @@ double surface_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm) {
 
 HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double inset_mm) {
   if (nx < 2 || ny < 2)
-    throw host::InputError("--grid", std::to_string(nx) + "x" + std::to_string(ny), "at least 2x2 points");
+    throw host::InputError("height map points", std::to_string(nx) + "x" + std::to_string(ny),
+                           "at least 2x2");
   HeightMap m;
   m.nx = nx;
   m.ny = ny;
@@ -67,7 +68,8 @@ HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double ins
   m.dx = ((w.max_x_m - w.min_x_m) * 1e3 - 2 * inset_mm) / (nx - 1);
   m.dy = ((w.max_y_m - w.min_y_m) * 1e3 - 2 * inset_mm) / (ny - 1);
   if (!(m.dx > 0) || !(m.dy > 0))
-    throw host::InputError("inset", host::format_number(inset_mm), "less than half the workpiece's size");
+    throw host::InputError("height map inset", host::format_number(inset_mm) + " mm",
+                           "less than half the workpiece's size");
   const double z0 = surface_z_mm(w, m.x0, m.y0);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) m.z.push_back(surface_z_mm(w, m.x0 + i * m.dx, m.y0 + j * m.dy) - z0);

@@ -96,22 +96,25 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
       scenarios.push_back(s);
   for (const std::string& n : o.scenarios)
     if (n != "job") find_scenario(n, o.quick);
+  // One run of the bench: what every run shares, and what this one is.
+  const auto spec = [&](const Platform& p, const Scenario& s, GainPolicy g, double record_dt_s) {
+    RunSpec r;
+    r.machine = o.machine;
+    r.platform = p;
+    r.scenario = s;
+    r.policy = g;
+    r.engine = o.engine;
+    r.seed = o.seed;
+    r.jitter = o.jitter;
+    r.record_dt_s = record_dt_s;
+    return r;
+  };
   for (const Scenario& s : scenarios)
     for (GainPolicy g : o.policies)
-      for (const Platform& p : platforms) {
-        RunSpec r;
-        r.machine = o.machine;
-        r.platform = p;
-        r.scenario = s;
-        r.policy = g;
-        r.engine = o.engine;
-        r.seed = o.seed;
-        r.jitter = o.jitter;
+      for (const Platform& p : platforms)
         // Every 10 us: fine enough for the contour error at the bench feeds
         // (0.25 um of travel), small enough files.
-        r.record_dt_s = 1e-5;
-        specs.push_back(std::move(r));
-      }
+        specs.push_back(spec(p, s, g, 1e-5));
   // The job: tuned gains (each platform's own), without and with the
   // feed-forward, planned once.
   std::string job;
@@ -123,17 +126,9 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
     for (FeedForward f : o.job_feedforward)
       for (const Platform& p : bench_platforms(o.machine)) {
         if (!std::count(names.begin(), names.end(), p.name)) continue;
-        RunSpec r;
-        r.machine = o.machine;
-        r.platform = p;
-        r.scenario = js;
-        r.policy = GainPolicy::Tuned;
-        r.feedforward = f;
-        r.engine = o.engine;
-        r.seed = o.seed;
-        r.jitter = o.jitter;
         // Every 100 us: 2 um of travel at the profile's 1200 mm/min.
-        r.record_dt_s = 1e-4;
+        RunSpec r = spec(p, js, GainPolicy::Tuned, 1e-4);
+        r.feedforward = f;
         specs.push_back(std::move(r));
       }
   }

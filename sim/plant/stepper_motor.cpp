@@ -27,14 +27,12 @@ StepperPlant::StepperPlant(const AxisConfig& axis, const StepperParams& stepper,
   require(m_.r_ohm > 0 && m_.l_h > 0, "stepper phase R, L", m_.r_ohm * m_.l_h, "both > 0");
   j_ = m_.j_kg_m2 + machine::reflected_inertia_kg_m2(axis);
   tau_load_ = machine::reflected_torque_nm(axis);
-  rad_to_m_ = axis.lead_m_per_rev / (2 * kPi * axis.gear_ratio);
-  rad_to_count_ = axis.encoder_cpr / (2 * kPi);
   a_ = std::exp(-m_.r_ohm / m_.l_h * dt_s);
   supply_ = axis.drive.supply_v;
 }
 
 void StepperPlant::reset(double position_rad) {
-  ia_ = ib_ = w_ = torque_ = 0;
+  ia_ = ib_ = w_ = 0;
   theta_ = position_rad;
   n_ = 0;
 }
@@ -64,14 +62,14 @@ void StepperPlant::step(int64_t steps, bool enabled) {
   // the driver's diodes within a step or two and none flows after.
   ia_ = chop(ia_, ref_a, -kt * w_ * sn);
   ib_ = chop(ib_, ref_b, kt * w_ * cs);
-  torque_ = kt * (ib_ * cs - ia_ * sn) - s_.detent_nm * std::sin(4 * nr * theta_);
+  const double torque = kt * (ib_ * cs - ia_ * sn) - s_.detent_nm * std::sin(4 * nr * theta_);
 
   // Mechanics: semi-implicit Euler (the rotor's resonance is some 100 Hz
   // against a 1 us step). Friction as dc_motor.cpp: at rest, the rotor
   // stays until the driving torque passes the breakaway torque; moving,
   // Coulomb opposes the speed; a sign change of the speed stops it for a
   // step, where the stiction test runs again.
-  const double drive = torque_ - tau_load_;
+  const double drive = torque - tau_load_;
   if (w_ == 0 && std::abs(drive) <= m_.stiction_nm) return;
   const double dir = w_ != 0 ? (w_ > 0 ? 1.0 : -1.0) : (drive > 0 ? 1.0 : -1.0);
   const double acc = (drive - m_.b_nm_s_per_rad * w_ - dir * m_.coulomb_nm) / j_;
@@ -91,10 +89,6 @@ int64_t StepperPlant::lost_full_steps(int64_t steps) const {
 
 int64_t StepperPlant::position_steps() const {
   return std::llround(theta_ * s_.rotor_teeth / (kPi / 2) * s_.microsteps);
-}
-
-int64_t StepperPlant::encoder_count() const {
-  return int64_t(std::floor(theta_ * rad_to_count_));
 }
 
 double StepperPlant::stiffness_nm_per_rad() const {

@@ -54,12 +54,7 @@ class StepperPlant {
 
   double time_s() const { return double(n_) * dt_; }
   double position_rad() const { return theta_; }
-  double speed_rad_s() const { return w_; }
   double current_a(int phase) const { return phase == 0 ? ia_ : ib_; }
-  double torque_nm() const { return torque_; }  // electromagnetic + detent, last step
-  double position_m() const { return theta_ * rad_to_m_; }
-  // The commanded shaft angle for `steps` driver steps.
-  double commanded_rad(int64_t steps) const;
   // Full steps the rotor has slipped behind (positive) or ahead of the
   // command: the whole electrical periods between them, times four. A
   // rotor within half a period of its command has lost nothing.
@@ -67,25 +62,24 @@ class StepperPlant {
   // The rotor's position in driver steps, rounded: what an encoder on the
   // shaft would report in step units.
   int64_t position_steps() const;
-  // floor(position_rad / (2 pi) * encoder_cpr), as AxisPlant::encoder_count.
-  int64_t encoder_count() const;
 
   // Small-signal stiffness of the energized motor about its equilibrium,
   // N m/rad, detent aside: Nr Kt I.
   double stiffness_nm_per_rad() const;
   double inertia_kg_m2() const { return j_; }
-  double load_torque_nm() const { return tau_load_; }
   void reset(double position_rad = 0);
 
  private:
   MotorParams m_;
   StepperParams s_;
-  double dt_, j_, tau_load_, rad_to_m_, rad_to_count_, supply_;
+  double dt_, j_, tau_load_, supply_;
   double a_;  // exp(-R dt / L): one phase's current decay over a step
-  double ia_ = 0, ib_ = 0, w_ = 0, theta_ = 0, torque_ = 0;
+  double ia_ = 0, ib_ = 0, w_ = 0, theta_ = 0;
   int64_t n_ = 0;
 
   double chop(double i, double i_ref, double emf) const;
+  // The commanded shaft angle for `steps` driver steps.
+  double commanded_rad(int64_t steps) const;
 };
 
 }  // namespace mc::sim
