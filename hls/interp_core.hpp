@@ -77,6 +77,8 @@ struct InterpIn {
   bool clr = false;
   uint8_t set = 0;  // a strobe per axis: bit a loads set_pos[a]
   int32_t set_pos[3] = {};
+  uint8_t jog = 0;  // a strobe per axis: bit a moves axis a one count while idle (set wins)
+  bool jog_neg = false;
 };
 
 template <int FIFO_AW = 9>
@@ -274,10 +276,12 @@ class InterpCore {
 
     switch (st_) {
       case ST_IDLE:
-        if (in.set) {
-          for (int ax = 0; ax < 3; ++ax)
-            if (in.set >> ax & 1) pos_[ax] = in.set_pos[ax];
-        } else if (ic_ == INIT_STEPS && count >= seg::SEG_WORDS) {
+        for (int ax = 0; ax < 3; ++ax)
+          if (in.set >> ax & 1)
+            pos_[ax] = in.set_pos[ax];
+          else if (in.jog >> ax & 1)
+            pos_[ax] = sat32(i128(pos_[ax]) + (in.jog_neg ? -1 : 1));
+        if (!in.set && ic_ == INIT_STEPS && count >= seg::SEG_WORDS) {
           st_ = ST_LOAD;
           widx_ = 0;
         }
@@ -375,7 +379,7 @@ class InterpCore {
   // clocks.
   bool quiet(const InterpIn& in) const {
     return st_ == ST_IDLE && ic_ == INIT_STEPS && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr &&
-           !in.abort && !in.clr && !in.set;
+           !in.abort && !in.clr && !in.set && !in.jog;
   }
   void skip(uint32_t n) {
     for (uint32_t i = 0; i < n && i < 2; ++i) clock(InterpIn{});

@@ -34,8 +34,11 @@ struct MotionIn {
   bool ip_abort = false, ip_hold = false, ip_clr = false;
   uint8_t ip_set = 0;  // a strobe per axis
   int32_t ip_set_pos[3] = {};
+  uint8_t ip_jog = 0;  // a strobe per axis: one count while idle (the handwheel)
+  bool ip_jog_neg = false;
   // encoders
   bool enc_a[NAXES] = {}, enc_b[NAXES] = {}, enc_z[NAXES] = {};
+  bool enc_latch[NAXES] = {};  // synchronous latch strobes (home switch, probe)
   uint32_t enc_filt[NAXES] = {};
   bool enc_dir_inv[NAXES] = {}, enc_idx_clr_en[NAXES] = {};
   bool enc_pos_load[NAXES] = {};
@@ -57,7 +60,8 @@ struct MotionIn {
     return rst == o.rst && pid_we == o.pid_we && pid_waddr == o.pid_waddr && pid_wdata == o.pid_wdata &&
            pid_re == o.pid_re && pid_raddr == o.pid_raddr && seg_wr == o.seg_wr && seg_wdata == o.seg_wdata &&
            ip_abort == o.ip_abort && ip_hold == o.ip_hold && ip_clr == o.ip_clr && ip_set == o.ip_set &&
-           same(ip_set_pos, o.ip_set_pos) && same(enc_a, o.enc_a) && same(enc_b, o.enc_b) &&
+           same(ip_set_pos, o.ip_set_pos) && ip_jog == o.ip_jog && ip_jog_neg == o.ip_jog_neg &&
+           same(enc_latch, o.enc_latch) && same(enc_a, o.enc_a) && same(enc_b, o.enc_b) &&
            same(enc_z, o.enc_z) && same(enc_filt, o.enc_filt) && same(enc_dir_inv, o.enc_dir_inv) &&
            same(enc_idx_clr_en, o.enc_idx_clr_en) && same(enc_pos_load, o.enc_pos_load) &&
            same(enc_pos_load_val, o.enc_pos_load_val) && same(enc_idx_arm, o.enc_idx_arm) &&
@@ -219,6 +223,8 @@ class MotionCore {
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
     for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
+    ii.jog = in.ip_jog;
+    ii.jog_neg = in.ip_jog_neg;
     // An idle interpolator stands still after two quiet clocks
     // (InterpCore::quiet); from then on its clock is skipped.
     if (in.rst) {
@@ -261,6 +267,7 @@ class MotionCore {
     ii.abort = in.ip_abort;
     ii.clr = in.ip_clr;
     ii.set = in.ip_set;
+    ii.jog = in.ip_jog;
     ii.hold = in.ip_hold;
     // The interpolator idle, or running with no iteration due in the n clocks.
     if (!(ip_.quiet(ii) || ip_.run_quiet(ii) >= n) || !pid_.quiet(pid_in(in, nullptr, nullptr), n))
@@ -363,6 +370,7 @@ class MotionCore {
     qi.a = in.enc_a[a];
     qi.b = in.enc_b[a];
     qi.z = in.enc_z[a];
+    qi.latch = in.enc_latch[a];
     return qi;
   }
 

@@ -33,6 +33,7 @@ struct QuadIn {
   bool a = false;
   bool b = false;
   bool z = false;
+  bool latch = false;  // synchronous strobe: latch as a Z edge would (a home switch, the probe)
 };
 
 // Outputs after a clock edge: the RTL's output ports without the _o suffix.
@@ -127,7 +128,7 @@ class QuadDecoder {
 
     const bool dn = step && !up;
     const uint32_t pos_cnt = r.pos_o + (dn ? ~0u : uint32_t(step));
-    const bool idx_hit = r.idx_armed_o && r.z_rise;
+    const bool idx_hit = r.idx_armed_o && (r.z_rise || in.latch);
 
     // Reset, then load, then the index clear, then counting.
     n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
@@ -200,9 +201,9 @@ class QuadDecoder {
   bool quiet(const QuadIn& in) const {
     const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
     const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
-    return !in.rst && !in.pos_load && !in.idx_arm && !in.idx_disarm && !in.err_clr && !in.sample &&
-           pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 && r_.cnt[1] == 0 &&
-           r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
+    return !in.rst && !in.latch && !in.pos_load && !in.idx_arm && !in.idx_disarm && !in.err_clr &&
+           !in.sample && pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 &&
+           r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
            (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   void skip(uint32_t n) {

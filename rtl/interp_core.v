@@ -22,6 +22,8 @@
 //   only while idle (busy_o low): a loader may set the axes one at a time
 //   from one 32-bit value (the board does); clr_i clears the sticky flags
 //   (an event in the same cycle wins).
+// - jog_i[a] moves axis a's command one count (down with jog_neg_i) while
+//   idle, as an iteration would: the board's handwheel jog. set_i wins.
 //
 // Structure: a serial engine, like pid_core. One 32-bit ALU,
 // out = A + (B ^ inv) + cin with A from read port a and B from read port b
@@ -49,6 +51,8 @@ module interp_core #(
     input  wire                clr_i,
     input  wire [         2:0] set_i,      // one strobe per axis: x, y, z
     input  wire [    3*32-1:0] set_pos_i,
+    input  wire [         2:0] jog_i,      // one strobe per axis, while idle
+    input  wire                jog_neg_i,
     // position command, counts: x in [31:0], y, z
     output wire [    3*32-1:0] pos_o,
     // status
@@ -540,8 +544,9 @@ module interp_core #(
       default: a_mv = movex ? 3'b001 : 3'b010;  // XY
     endcase
   end
-  wire [2:0] mv = !commit ? 3'b000 : (is_line ? lmv : (is_arc ? a_mv : 3'b000));
-  wire [2:0] neg = is_line ? neg_h : {3{negm}};
+  wire       idle = st == ST_IDLE;
+  wire [2:0] mv = idle ? jog_i : (!commit ? 3'b000 : (is_line ? lmv : (is_arc ? a_mv : 3'b000)));
+  wire [2:0] neg = idle ? {3{jog_neg_i}} : (is_line ? neg_h : {3{negm}});
 
   genvar g;
   generate
@@ -553,7 +558,7 @@ module interp_core #(
       wire        step = mv[g] && !(p[31] == neg[g] && p_n[31] != neg[g]);
       always @(posedge clk) begin
         if (rst) p <= 32'd0;
-        else if (st == ST_IDLE && set_i[g]) p <= set_pos_i[g*32+:32];
+        else if (idle && set_i[g]) p <= set_pos_i[g*32+:32];
         else if (step) p <= p_n;
       end
       assign pos_o[g*32+:32] = p;

@@ -295,6 +295,8 @@ module mc_board #(
       .ip_clr          (ip_clr),
       .ip_set          (ip_set),
       .ip_set_pos      ({3{ip_set_val}}),  // one value, an axis at a time
+      .ip_jog          (3'd0),  // the handwheel jog: not wired on this board yet
+      .ip_jog_neg      (1'b0),
       .ip_busy         (ip_busy),
       .ip_underrun     (ip_underrun),
       .ip_ovf          (ip_ovf),
@@ -302,6 +304,7 @@ module mc_board #(
       .enc_a           (enc_a_i),
       .enc_b           (enc_b_i),
       .enc_z           (enc_z_i),
+      .enc_latch       ({NAXES{1'b0}}),  // home/probe latch strobes: not wired yet
       .enc_filt        (enc_filt),
       .enc_dir_inv     (enc_dir_inv),
       .enc_idx_clr_en  (enc_idx_clr_en),
@@ -360,6 +363,7 @@ module mc_board #(
       .enc_a_i       (hw_a_i),
       .enc_b_i       (hw_b_i),
       .enc_z_i       (1'b0),
+      .latch_i       (1'b0),
       .pos_o         (hw_pos),
       .idx_pos_o     (),
       .idx_armed_o   (),

@@ -70,6 +70,8 @@ module motion_core #(
     input  wire                  ip_clr,
     input  wire [           2:0] ip_set,
     input  wire [      3*32-1:0] ip_set_pos,
+    input  wire [           2:0] ip_jog,      // handwheel jog: one count, while idle
+    input  wire                  ip_jog_neg,
     output wire                  ip_busy,
     output wire                  ip_underrun,
     output wire                  ip_ovf,
@@ -78,6 +80,7 @@ module motion_core #(
     input  wire [     NAXES-1:0] enc_a,
     input  wire [     NAXES-1:0] enc_b,
     input  wire [     NAXES-1:0] enc_z,
+    input  wire [     NAXES-1:0] enc_latch,  // synchronous latch strobes (home switch, probe)
     // encoder configuration and strobes, one slice per axis (quad_decoder)
     input  wire [NAXES*FILT_W-1:0] enc_filt,
     input  wire [     NAXES-1:0] enc_dir_inv,
@@ -144,6 +147,8 @@ module motion_core #(
       .clr_i     (ip_clr),
       .set_i     (ip_set),
       .set_pos_i (ip_set_pos),
+      .jog_i     (ip_jog),
+      .jog_neg_i (ip_jog_neg),
       .pos_o     (ip_pos),
       .busy_o    (ip_busy),
       .underrun_o(ip_underrun),
@@ -178,6 +183,7 @@ module motion_core #(
           .enc_a_i       (enc_a[g]),
           .enc_b_i       (enc_b[g]),
           .enc_z_i       (enc_z[g]),
+          .latch_i       (enc_latch[g]),
           .pos_o         (pos[g*32+:32]),
           .idx_pos_o     (enc_idx_pos[g*32+:32]),
           .idx_armed_o   (enc_idx_armed[g]),

@@ -22,6 +22,9 @@
 //   position (this clock's edge included) into idx_pos_o, sets idx_seen_o and
 //   drops idx_armed_o. With idx_clr_en_i high, that same position becomes 0.
 //   idx_disarm_i cancels an armed latch; arming clears idx_seen_o.
+//   latch_i, a synchronous strobe from outside (a home switch, the probe),
+//   latches the same way as a Z edge, in the clock it is high: the board
+//   latches every armed axis in one clock from one probe edge.
 //   With IDX_RAM = 1 the latched position lives in block RAM instead of 32
 //   flip-flops: idx_pos_o then follows a clock later (the RAM's output
 //   register) and reset leaves it as it was; idx_seen_o says whether it is
@@ -64,6 +67,7 @@ module quad_decoder #(
     input  wire              enc_a_i,
     input  wire              enc_b_i,
     input  wire              enc_z_i,
+    input  wire              latch_i,         // synchronous: latch as a Z edge would
     // position and index
     output reg  [      31:0] pos_o,           // signed counts, wraps
     output reg  [      31:0] idx_pos_o,       // signed counts
@@ -179,7 +183,7 @@ module quad_decoder #(
   // One adder for both directions: +1, -1 (all ones) or 0.
   wire        dn = step & ~up;
   wire [31:0] pos_cnt = pos_o + {{31{dn}}, step};
-  wire        idx_hit = idx_armed_o & z_rise;
+  wire        idx_hit = idx_armed_o & (z_rise | latch_i);
 
   // Load beats the index clear, which beats counting: software's explicit
   // value is the one it expects to read back.
@@ -353,7 +357,7 @@ module quad_decoder #(
   wire f_fwd = !f_rst_q && f_d == 2'd1;
   wire f_back = !f_rst_q && f_d == 2'd3;
   wire f_both = !f_rst_q && f_d == 2'd2;
-  wire f_hit = idx_armed_o && !f_rst_q && z_o && !f_z_q;  // armed, and a rising filtered Z
+  wire f_hit = idx_armed_o && !f_rst_q && ((z_o && !f_z_q) || latch_i);  // armed, and a rising filtered Z or a latch strobe
   wire [31:0] f_delta = (f_fwd != f_back) ? ((f_fwd ^ dir_inv_i) ? 32'd1 : 32'hFFFF_FFFF) : 32'd0;
 
   reg [31:0] f_pos_q, f_delta_q, f_load_val_q;

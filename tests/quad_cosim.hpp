@@ -64,6 +64,7 @@ class QuadCosimT {
     dut_->enc_a_i = in.a;
     dut_->enc_b_i = in.b;
     dut_->enc_z_i = in.z;
+    dut_->latch_i = in.latch;
   }
   void clock() {
     dut_->clk = 0;

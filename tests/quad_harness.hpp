@@ -134,7 +134,7 @@ class QuadBench {
   QuadOut clock() {
     wave.sample(double(now), in);
     out = sim.cycle(in);
-    in.pos_load = in.idx_arm = in.idx_disarm = in.err_clr = in.sample = false;
+    in.pos_load = in.idx_arm = in.idx_disarm = in.err_clr = in.sample = in.latch = false;
     ++now;
     return out;
   }

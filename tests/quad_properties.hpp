@@ -443,9 +443,58 @@ TYPED_TEST_P(QuadProperties, VelocityIsTheCountDifferencePerSample) {
   EXPECT_EQ(b.sim.mismatches(), 0);
 }
 
+// The latch strobe (a home switch, the probe) latches as an index edge
+// does: only when armed, the position of its own clock (a count edge in
+// that clock included), once.
+TYPED_TEST_P(QuadProperties, LatchStrobeLatchesLikeAnIndexEdge) {
+  typename TestFixture::Bench b(11);
+  b.in.filt_len = 2;
+  const double T = 4.0;
+  b.move(6, 1, T);
+  b.drain();
+  b.in.latch = true;  // not armed: nothing
+  b.clock();
+  b.drain();
+  EXPECT_FALSE(b.out.idx_seen);
+  for (int dir : {1, -1}) {
+    b.in.idx_arm = true;
+    b.clock();
+    b.move(3, dir, T);
+    b.drain();
+    const int32_t at = b.out.pos;
+    b.in.latch = true;
+    b.clock();
+    EXPECT_TRUE(b.out.idx_seen);
+    EXPECT_FALSE(b.out.idx_armed);
+    b.drain();
+    EXPECT_EQ(b.out.idx_pos, at);
+    b.in.latch = true;  // disarmed by the first: a second strobe changes nothing
+    b.clock();
+    b.move(2, dir, T);
+    b.drain();
+    EXPECT_EQ(b.out.idx_pos, at);
+  }
+  // A count edge in the strobe's clock: the latched position includes it.
+  b.in.idx_arm = true;
+  b.clock();
+  const double t = b.next_time();
+  b.wave.edge(t, 1);
+  TestFixture::run_to(b, TestFixture::clock_of(b, t));
+  const int32_t before = b.out.pos;
+  b.in.latch = true;  // the next clock is the one that counts the edge
+  b.clock();
+  EXPECT_EQ(b.out.pos, before + 1);
+  b.drain();
+  EXPECT_TRUE(b.out.idx_seen);
+  EXPECT_EQ(b.out.idx_pos, before + 1);
+  EXPECT_EQ(b.out.pos, b.truth32());
+  EXPECT_EQ(b.sim.mismatches(), 0);
+}
+
 REGISTER_TYPED_TEST_SUITE_P(QuadProperties, ResetAdoptsThePinLevels, LatencyLevelsThenCount,
                             NoiseShorterThanTheFilterCountsNothing, ReversalsAtEveryPhaseCountExactly,
-                            ExactUpToTheRateLimitFlaggedPastIt, IndexLatchAndClear, LoadStrobeAndWrap,
-                            ErrorFlagClearAndSaturation, VelocityIsTheCountDifferencePerSample);
+                            ExactUpToTheRateLimitFlaggedPastIt, IndexLatchAndClear,
+                            LatchStrobeLatchesLikeAnIndexEdge, LoadStrobeAndWrap, ErrorFlagClearAndSaturation,
+                            VelocityIsTheCountDifferencePerSample);
 
 }  // namespace mc::test

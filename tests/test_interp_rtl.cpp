@@ -74,6 +74,8 @@ class InterpCosim {
     dut_->clr_i = in.clr;
     dut_->set_i = in.set;
     for (int a = 0; a < 3; ++a) put32(dut_->set_pos_i, a, uint32_t(in.set_pos[a]));
+    dut_->jog_i = in.jog;
+    dut_->jog_neg_i = in.jog_neg;
   }
   void edge() {
     dut_->clk = 0;
@@ -235,6 +237,8 @@ TEST(InterpRtl, MalformedWordsAndRandomControlStayBitExact) {
       in.clr = e >= 50 && e < 60;
       in.set = e >= 60 && e < 65 ? uint8_t(rng() % 8) : 0;
       for (int a = 0; a < 3; ++a) in.set_pos[a] = int32_t(rng());
+      in.jog = e >= 65 && e < 120 ? uint8_t(rng() % 8) : 0;
+      in.jog_neg = r(2) == 0;
       if (r(5) == 0) {
         in.wr = true;  // a stray word: misaligns the writer until an abort
         in.wdata = uint32_t(rng());
@@ -243,6 +247,53 @@ TEST(InterpRtl, MalformedWordsAndRandomControlStayBitExact) {
     }
   }
   ASSERT_FALSE(rig.sim.mismatch());
+}
+
+// The handwheel jog: one count per strobe while idle, either way, per axis;
+// a load in the same clock wins; saturates, never wraps; ignored while a
+// segment runs (the path is the one without the strobes).
+TEST(InterpRtl, JogMovesTheIdleCommandOneCount) {
+  Rig rig(31);
+  rig.set({10, -5, 0});
+  auto jog = [&](uint8_t axes, bool neg) {
+    InterpIn in;
+    in.jog = axes;
+    in.jog_neg = neg;
+    rig.clock(in);
+  };
+  jog(1, false);
+  EXPECT_EQ(rig.sim.pos(), (Vec3{11, -5, 0}));
+  jog(6, true);
+  EXPECT_EQ(rig.sim.pos(), (Vec3{11, -6, -1}));
+  InterpIn both;  // load X, jog X and Y: X takes the load
+  both.set = 1;
+  both.set_pos[0] = 100;
+  both.jog = 3;
+  rig.clock(both);
+  EXPECT_EQ(rig.sim.pos(), (Vec3{100, -5, -1}));
+  rig.set({INT32_MAX, INT32_MIN, 0});
+  jog(1, false);
+  jog(2, true);
+  EXPECT_EQ(rig.sim.pos(), (Vec3{INT32_MAX, INT32_MIN, 0}));
+
+  // While a segment runs the strobes change nothing.
+  Rig plain(32);
+  SegGen g(33);
+  const PlannedSegment seg = g.line({0, 0, 0});
+  for (Rig* x : {&rig, &plain}) {
+    x->set({0, 0, 0});
+    x->push(seg);
+  }
+  std::mt19937_64 rng(34);
+  while (plain.sim.busy() || plain.sim.count() >= seg::SEG_WORDS) {
+    InterpIn in;
+    in.jog = rig.sim.busy() ? uint8_t(rng() % 8) : 0;
+    in.jog_neg = rng() % 2;
+    rig.clock(in);
+    plain.clock();
+    ASSERT_EQ(rig.sim.pos(), plain.sim.pos());
+  }
+  EXPECT_FALSE(rig.sim.mismatch());
 }
 
 TEST(InterpRtl, FifoOverflowDropsWholeSegmentsInOrder) {

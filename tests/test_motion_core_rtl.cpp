@@ -214,6 +214,10 @@ void random_run(uint32_t seed, uint64_t cycles) {
     if (in.ip_set && !o.ip_busy)
       for (int a = 0; a < 3; ++a)
         if (in.ip_set >> a & 1) at[size_t(a)] = in.ip_set_pos[a];
+    // Handwheel jog strobes: they act only while the interpolator is idle;
+    // segments move relative to where they start, so a jog just offsets them.
+    in.ip_jog = rng() % 3000 == 0 ? uint8_t(1 + rng() % 7) : 0;
+    in.ip_jog_neg = rng() % 2;
     // Encoders and drive.
     for (int a = 0; a < N; ++a) {
       in.enc_pos_load[a] = rng() % 30000 == 0;
@@ -222,6 +226,7 @@ void random_run(uint32_t seed, uint64_t cycles) {
       in.enc_idx_disarm[a] = rng() % 20000 == 0;
       in.enc_err_clr[a] = rng() % 5000 == 0;
       in.enc_z[a] = rng() % 3000 == 0 ? !in.enc_z[a] : in.enc_z[a];
+      in.enc_latch[a] = rng() % 3000 == 0;
       in.enc_dir_inv[a] = rng() % 50000 == 0 ? !in.enc_dir_inv[a] : in.enc_dir_inv[a];
       in.enc_idx_clr_en[a] = rng() % 2;
       if (rng() % 20000 == 0) in.drv_allow[a] = !in.drv_allow[a];

@@ -26,13 +26,16 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   d.ip_clr = in.ip_clr;
   d.ip_set = in.ip_set;
   for (int a = 0; a < 3; ++a) vl::put32(d.ip_set_pos, a, uint32_t(in.ip_set_pos[a]));
-  uint32_t ea = 0, eb = 0, ez = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0, allow = 0, ovr = 0,
-           ovw = 0;
+  d.ip_jog = in.ip_jog;
+  d.ip_jog_neg = in.ip_jog_neg;
+  uint32_t ea = 0, eb = 0, ez = 0, elat = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0,
+           allow = 0, ovr = 0, ovw = 0;
   uint64_t filt = 0;
   for (int a = 0; a < N; ++a) {
     ea |= uint32_t(in.enc_a[a]) << a;
     eb |= uint32_t(in.enc_b[a]) << a;
     ez |= uint32_t(in.enc_z[a]) << a;
+    elat |= uint32_t(in.enc_latch[a]) << a;
     filt |= uint64_t(in.enc_filt[a] & 0xFF) << (8 * a);
     dinv |= uint32_t(in.enc_dir_inv[a]) << a;
     iclr |= uint32_t(in.enc_idx_clr_en[a]) << a;
@@ -48,6 +51,7 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   vl::set(d.enc_a, ea);
   vl::set(d.enc_b, eb);
   vl::set(d.enc_z, ez);
+  vl::set(d.enc_latch, elat);
   vl::set(d.enc_filt, filt);
   vl::set(d.enc_dir_inv, dinv);
   vl::set(d.enc_idx_clr_en, iclr);
