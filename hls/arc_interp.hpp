@@ -45,6 +45,7 @@ namespace mc {
 // per axis, towards minus when mxn/myn. q: 0..3 = Q1..Q4 (see the table
 // above). The RTL forms the same `upper` (Q1, Q2) and `right` (Q1, Q4).
 struct ArcQuadrant {
+  bool operator==(const ArcQuadrant&) const = default;
   int q = 0;
   int mx = 1, my = 1;  // +1 or -1
 };
@@ -62,6 +63,7 @@ inline ArcQuadrant arc_quadrant(int64_t x, int64_t y, bool ccw) {
 
 // One iteration's decision.
 struct ArcStep {
+  bool operator==(const ArcStep&) const = default;
   bool movex = false;    // move x (else y)
   int dir = 1;           // +1 or -1
   bool outward = false;  // |x| + |y| grows (the feed generator adds k)
@@ -70,6 +72,7 @@ struct ArcStep {
 
 class ArcInterp {
  public:
+  bool operator==(const ArcInterp&) const = default;
   void load(int idx, uint32_t w) {
     if (idx == seg::W_HDR) {
       ccw_ = (w >> seg::H_CCW) & 1;

@@ -11,6 +11,7 @@
 namespace mc {
 
 struct Crc16Ccitt {
+  bool operator==(const Crc16Ccitt&) const = default;
   uint16_t crc_o = 0xFFFF;
   uint8_t sh = 0;
   uint8_t n = 0;  // bits left to shift in

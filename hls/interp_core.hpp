@@ -70,6 +70,7 @@
 namespace mc {
 
 struct InterpIn {
+  bool operator==(const InterpIn&) const = default;
   bool wr = false;
   uint32_t wdata = 0;
   bool abort = false;
@@ -86,6 +87,7 @@ class InterpCore {
   static_assert(FIFO_AW >= 4 && FIFO_AW <= 12, "interp_core: FIFO_AW must be 4..12");
 
  public:
+  bool operator==(const InterpCore&) const = default;
   static constexpr int ST_IDLE = 0, ST_LOAD = 1, ST_PREP = 2, ST_RUN = 3;
   static constexpr int DEPTH = 1 << FIFO_AW;
   static constexpr int TICK = 1 << seg::TICK_LOG2;  // clocks per iteration, at most one
@@ -402,6 +404,7 @@ class InterpCore {
   enum { W_NONE, W_BOTH, W_LO, W_MASK, W_SWAP };
   // A is always read port a; B is read port b or the FIFO word.
   struct Op {
+    bool operator==(const Op&) const = default;
     bool bfd = false, binv = false;  // B: the FIFO word (else read port b), inverted
     int cin = 0;
     int wa = 0;  // write address
@@ -410,6 +413,7 @@ class InterpCore {
   static Op alu(bool binv, int cin, int wa, int we) { return Op{false, binv, cin, wa, we}; }
   static constexpr int kInitAddr[INIT_STEPS] = {1, 0, 0, 11, 12};
   struct Addr {
+    bool operator==(const Addr&) const = default;
     int a = 1, b = 1;
   };
   // The read addresses of the next clock's operation, by the current state

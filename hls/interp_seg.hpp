@@ -77,6 +77,7 @@ constexpr uint32_t N_MASK = (uint32_t(1) << N_W) - 1;
 // A segment as fields. pack() gives the words the host queues; the RTL and the
 // twin pick the same fields out of the words as they are loaded.
 struct Segment {
+  bool operator==(const Segment&) const = default;
   int type = T_LINE;
   bool last = false;
   bool ccw = false;

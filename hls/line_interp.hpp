@@ -25,6 +25,7 @@ namespace mc {
 
 class LineInterp {
  public:
+  bool operator==(const LineInterp&) const = default;
   static constexpr int E_W = seg::N_W + 1;
   static constexpr uint32_t E_MASK = (uint32_t(1) << E_W) - 1;
 

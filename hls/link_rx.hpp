@@ -16,6 +16,7 @@
 namespace mc {
 
 struct LinkRxIn {
+  bool operator==(const LinkRxIn&) const = default;
   bool rst = false;
   uint8_t byte = 0;
   bool valid = false;
@@ -25,6 +26,7 @@ struct LinkRxIn {
 
 template <int CLK_HZ = 12'000'000>
 struct LinkRx {
+  bool operator==(const LinkRx&) const = default;
   static_assert(CLK_HZ >= 1'000'000, "link_rx: CLK_HZ below 1 MHz");
   static constexpr uint32_t TIMEOUT = uint32_t(CLK_HZ / 1'000'000 * board::proto::BYTE_TIMEOUT_US);  // clocks
   enum : uint8_t { S_HUNT = 0, S_LEN = 1, S_SEQ = 2, S_CMD = 3, S_PAY = 4, S_CRC0 = 5, S_CRC1 = 6 };

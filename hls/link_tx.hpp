@@ -16,6 +16,7 @@
 namespace mc {
 
 struct LinkTxIn {
+  bool operator==(const LinkTxIn&) const = default;
   bool rst = false;
   // payload RAM
   bool we = false;
@@ -32,6 +33,7 @@ struct LinkTxIn {
 };
 
 struct LinkTx {
+  bool operator==(const LinkTx&) const = default;
   enum : uint8_t { S_IDLE = 0, S_HDR = 1, S_STAT = 2, S_DATA = 3, S_CRC0 = 4, S_CRC1 = 5, S_END = 6 };
 
   uint32_t ram[16] = {};

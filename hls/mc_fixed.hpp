@@ -61,6 +61,7 @@ constexpr int64_t sext(uint64_t x, int w) {
 
 // Coefficient word layout: [29:24] shift, [23:0] mantissa; [31:30] read as 0.
 struct Coef {
+  bool operator==(const Coef&) const = default;
   int32_t m;  // signed COEF_M_W bits
   int s;      // 0..COEF_S_MAX
 };
@@ -87,6 +88,7 @@ constexpr int64_t mul_align(Coef c, int32_t x) {
 // when yh is saturated. pid_core's adder takes yc as its carry-in, so the
 // increment needs no adder of its own. mul_align(c, x) == yh + yc always.
 struct MulAlignParts {
+  bool operator==(const MulAlignParts&) const = default;
   int64_t yh;  // ACC_W bits signed
   int yc;      // 0 or 1
 };

@@ -20,6 +20,7 @@ namespace mc {
 
 template <int NAXES>
 struct McRegsIn {
+  bool operator==(const McRegsIn&) const = default;
   bool rst = false;
   // frames from link_rx
   bool frame = false;
@@ -57,6 +58,7 @@ class McRegs {
   static_assert(FILT_W >= 1 && FILT_W <= 8, "mc_regs: FILT_W must be 1..8");
 
  public:
+  bool operator==(const McRegs&) const = default;
   using In = McRegsIn<NAXES>;
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
   static constexpr uint32_t WDOG_RESET = board::wdog_default(CLK_HZ) & 0xFFFFFF;
@@ -81,6 +83,7 @@ class McRegs {
 
   // The registers (widths in the comments where narrower than the type).
   struct R {
+    bool operator==(const R&) const = default;
     // link drop counters: events not yet added
     bool drop_busy = false, cnt_nak_inc = false, cnt_dup_inc = false;
     uint8_t cnt_pend = 0;  // 5 bits

@@ -16,6 +16,7 @@
 namespace mc {
 
 struct McSafetyIn {
+  bool operator==(const McSafetyIn&) const = default;
   bool rst = false;
   // host commands
   bool arm_set = false, arm_clr = false;
@@ -30,6 +31,7 @@ struct McSafetyIn {
 
 template <int NAXES = 3>
 struct McSafety {
+  bool operator==(const McSafety&) const = default;
   static_assert(NAXES >= 1 && NAXES <= 3, "mc_safety: NAXES must be 1..3");
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
 

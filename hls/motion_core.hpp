@@ -52,27 +52,12 @@ struct MotionIn {
   // sample RAM read: axis << 3 | field
   uint8_t smp_raddr = 0;
 
-  // Field by field (the struct has padding, so not memcmp).
-  bool operator==(const MotionIn& o) const {
-    auto same = [](const auto& x, const auto& y) {
-      return std::equal(std::begin(x), std::end(x), std::begin(y));
-    };
-    return rst == o.rst && pid_we == o.pid_we && pid_waddr == o.pid_waddr && pid_wdata == o.pid_wdata &&
-           pid_re == o.pid_re && pid_raddr == o.pid_raddr && seg_wr == o.seg_wr && seg_wdata == o.seg_wdata &&
-           ip_abort == o.ip_abort && ip_hold == o.ip_hold && ip_clr == o.ip_clr && ip_set == o.ip_set &&
-           same(ip_set_pos, o.ip_set_pos) && ip_jog == o.ip_jog && ip_jog_neg == o.ip_jog_neg &&
-           same(enc_latch, o.enc_latch) && same(enc_a, o.enc_a) && same(enc_b, o.enc_b) &&
-           same(enc_z, o.enc_z) && same(enc_filt, o.enc_filt) && same(enc_dir_inv, o.enc_dir_inv) &&
-           same(enc_idx_clr_en, o.enc_idx_clr_en) && same(enc_pos_load, o.enc_pos_load) &&
-           same(enc_pos_load_val, o.enc_pos_load_val) && same(enc_idx_arm, o.enc_idx_arm) &&
-           same(enc_idx_disarm, o.enc_idx_disarm) && same(enc_err_clr, o.enc_err_clr) &&
-           same(drv_allow, o.drv_allow) && same(drv_ovr, o.drv_ovr) && same(drv_ovr_we, o.drv_ovr_we) &&
-           drv_ovr_val == o.drv_ovr_val && smp_raddr == o.smp_raddr;
-  }
+  bool operator==(const MotionIn&) const = default;
 };
 
 template <int NAXES>
 struct MotionOut {
+  bool operator==(const MotionOut&) const = default;
   bool pid_wready = false, pid_rready = false, pid_rvalid = false;
   uint32_t pid_rdata = 0;
   int seg_count = 0;
@@ -102,6 +87,7 @@ class MotionCore {
   static_assert(PWM_BITS >= 1 && PWM_BITS <= 15, "motion_core: PWM_BITS must be 1..15");
 
  public:
+  bool operator==(const MotionCore&) const = default;
   using In = MotionIn<NAXES>;
   using Out = MotionOut<NAXES>;
   using Pid = PidCoreClocked<NAXES>;
@@ -375,6 +361,7 @@ class MotionCore {
   }
 
   struct Regs {
+    bool operator==(const Regs&) const = default;
     int32_t in_cmd[NAXES] = {}, in_fb[NAXES] = {};
     bool pb = false;
     uint32_t smp_rdata = 0;

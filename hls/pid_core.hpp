@@ -44,11 +44,13 @@ constexpr int pid_latency(int naxes) {
 
 // Per-axis parameters as stored (the coefficient RAM of the RTL).
 struct PidParams {
+  bool operator==(const PidParams&) const = default;
   uint32_t word[pid_reg::NREGS_RAM] = {};
 };
 
 // Per-axis state carried between samples.
 struct PidState {
+  bool operator==(const PidState&) const = default;
   int64_t i = 0;   // integrator, Q17.32
   int64_t d = 0;   // derivative filter state, Q17.32
   int32_t e1 = 0;  // e(k-1)
@@ -57,6 +59,7 @@ struct PidState {
 };
 
 struct PidOut {
+  bool operator==(const PidOut&) const = default;
   int32_t u = 0;    // drive output, OUT_W bits
   int32_t err = 0;  // processed error (after deadband and clamp)
   bool sat = false;
@@ -145,6 +148,7 @@ class PidCore {
   static_assert(NAXES >= 1 && NAXES <= 15, "pid_core: NAXES must be 1..15");
 
  public:
+  bool operator==(const PidCore&) const = default;
   static constexpr int latency = pid_latency(NAXES);
 
   // Synchronous reset: enables and state cleared, Ts back to its minimum.
@@ -217,11 +221,13 @@ constexpr int clog2(int v) {
 template <int NAXES>
 class PidCoreClocked {
  public:
+  bool operator==(const PidCoreClocked&) const = default;
   static constexpr int latency = PidCore<NAXES>::latency;
   // State RAM depth: clog2(NAXES + 1) slot bits + 3 word bits (rtl/pid_core.v).
   static constexpr int clear_cycles = 8 << clog2(NAXES + 1);
 
   struct In {
+    bool operator==(const In&) const = default;
     bool rst = false;
     bool we = false;
     uint8_t waddr = 0;

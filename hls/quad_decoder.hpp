@@ -17,6 +17,7 @@ namespace mc {
 
 // Inputs of one clock: the RTL's ports without clk and the _i suffix.
 struct QuadIn {
+  bool operator==(const QuadIn&) const = default;
   bool rst = false;
   // configuration
   uint32_t filt_len = 0;  // clocks; only the low FILT_W bits reach the RTL
@@ -49,12 +50,7 @@ struct QuadOut {
   bool a = false;
   bool b = false;
   bool z = false;
-  bool operator==(const QuadOut& o) const {
-    return pos == o.pos && idx_pos == o.idx_pos && idx_armed == o.idx_armed && idx_seen == o.idx_seen &&
-           err == o.err && err_cnt == o.err_cnt && vel == o.vel && age == o.age && a == o.a && b == o.b &&
-           z == o.z;
-  }
-  bool operator!=(const QuadOut& o) const { return !(*this == o); }
+  bool operator==(const QuadOut&) const = default;
 };
 
 // All ones in the low w bits (w <= 32).
@@ -72,6 +68,7 @@ class QuadDecoder {
   static_assert(AGE_W >= 2 && AGE_W <= 32, "quad_decoder: AGE_W must be 2..32");
 
  public:
+  bool operator==(const QuadDecoder&) const = default;
   static constexpr int filt_w = FILT_W, err_w = ERR_W, vel_w = VEL_W, age_w = AGE_W;
 
   // The RTL's registers power up at random; its synchronous reset (held 3
@@ -245,6 +242,7 @@ class QuadDecoder {
   }
 
   struct Regs {
+    bool operator==(const Regs&) const = default;
     bool step = false, fwd = false, qerr = false, z_rise = false;  // the registered decision
     uint32_t meta = 0, sync = 0;                                   // 3 bits each
     uint32_t cnt[3] = {};                                          // FILT_W bits each

@@ -16,6 +16,7 @@ namespace mc {
 template <int AW>
 class SegFifo {
  public:
+  bool operator==(const SegFifo&) const = default;
   static constexpr int DEPTH = 1 << AW;
 
   void reset() { wp_ = rp_ = count_ = 0; }

@@ -14,6 +14,7 @@
 namespace mc {
 
 struct StepGenIn {
+  bool operator==(const StepGenIn&) const = default;
   bool rst = false;
   uint8_t cmd = 0;  // the position command's two low bits
   bool sync = false, en = false;
@@ -23,6 +24,7 @@ struct StepGenIn {
 
 template <int PW_W = 8, int BL_W = 4>
 struct StepGen {
+  bool operator==(const StepGen&) const = default;
   static_assert(PW_W >= 2 && PW_W <= 16, "step_gen: PW_W must be 2..16");
   static_assert(BL_W >= 2 && BL_W <= 8, "step_gen: BL_W must be 2..8");
   static constexpr uint32_t PW_MASK = (1u << PW_W) - 1;

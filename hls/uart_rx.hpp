@@ -12,6 +12,7 @@ namespace mc {
 
 template <int CLK_HZ = 12'000'000, int BAUD = 1'000'000>
 struct UartRx {
+  bool operator==(const UartRx&) const = default;
   static constexpr int DIV = (CLK_HZ + BAUD / 2) / BAUD;  // clocks per bit
   static_assert(DIV >= 4, "uart_rx: CLK_HZ/BAUD must be at least 4");
   static_assert((int64_t(DIV) * BAUD - CLK_HZ) * 50 <= CLK_HZ &&

@@ -12,6 +12,7 @@ namespace mc {
 
 template <int CLK_HZ = 12'000'000, int BAUD = 1'000'000>
 struct UartTx {
+  bool operator==(const UartTx&) const = default;
   static constexpr int DIV = (CLK_HZ + BAUD / 2) / BAUD;  // clocks per bit, as uart_rx
   static_assert(DIV >= 4, "uart_tx: CLK_HZ/BAUD must be at least 4");
   static constexpr uint32_t FULL = DIV - 1;
