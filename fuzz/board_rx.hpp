@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "Vmotioncore_icebreaker.h"
+#include "fuzz/board_rx_setup.hpp"
 #include "hls/board_regs.hpp"
 #include "hls/pid_regs.hpp"
 #include "host/link/protocol.hpp"
@@ -77,19 +78,7 @@ class BoardRx {
     inputs_at_rest(*top_);
     run(64);
     expect_ok(hp::ping(0), "PING");
-    // Distinct values in every writable register, so that a stray write
-    // of zero or of another register's value shows. The drives stay
-    // disarmed and the PIDs off: nothing moves, nothing changes by itself.
-    write(br::WDOG, (1u << board::WDOG_W) - 1);
-    write(br::SAFETY, 0x07);
-    write(br::HW_CFG, 0x105);
-    for (int a = 0; a < kAxes; ++a) {
-      write(uint16_t(br::IP_SET_X + a), 0x12345u * uint32_t(a + 1));
-      write(axis(a, br::AX_ENC_CFG), 0x103u + uint32_t(a));
-      write(axis(a, br::AX_FERR), 1000u + uint32_t(a));
-      for (uint8_t r = 0; r < pid_reg::NREGS_RAM; ++r)
-        write(pid_reg::addr(uint8_t(a), r), 0x1001u * (uint32_t(r) + 1) + uint32_t(a));
-    }
+    write_distinct_registers(kAxes, [this](uint16_t addr, uint32_t v) { write(addr, v); });
     ref_ = snapshot();
   }
   ~BoardRx() { top_->final(); }
@@ -145,7 +134,7 @@ class BoardRx {
   size_t watched() const { return ref_.size(); }
 
  private:
-  static uint16_t axis(int a, uint16_t off) { return uint16_t(br::AXIS_BASE + a * br::AXIS_STRIDE + off); }
+  static uint16_t axis(int a, uint16_t off) { return axis_reg(a, off); }
   static std::string hex(uint32_t v) {
     char b[16];
     std::snprintf(b, sizeof b, "0x%X", v);

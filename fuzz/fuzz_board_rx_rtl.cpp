@@ -1,5 +1,7 @@
 // libFuzzer target: arbitrary bytes on the Verilated board's RX pin
 // (fuzz/board_rx.hpp): only a frame with a good CRC may change the board.
+// About one input a second, so fuzz/run.sh uses it to replay on the RTL the
+// inputs fuzz_board_rx (the same rule on the board twin) found.
 // One board serves every input (building one costs more than an input); each
 // input is one burst, followed by a quiet line and a full register check.
 #include <cstddef>

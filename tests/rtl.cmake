@@ -73,7 +73,8 @@ target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_cosim)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
 target_link_libraries(test_board_rtl PRIVATE mc_hls mc_motion vboard)
 # Hostile bytes on the board's RX pin: no bad frame changes a register
-# (fuzz/board_rx.hpp; fuzz_board_rx runs the same check under libFuzzer).
+# (fuzz/board_rx.hpp) and on the board twin (fuzz/board_rx_twin.hpp); the
+# fuzz_board_rx* targets run the same checks under libFuzzer.
 mc_gtest(test_board_rx rtl test_board_rx.cpp)
 target_link_libraries(test_board_rx PRIVATE mc_link vboard)
 

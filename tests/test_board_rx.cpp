@@ -2,13 +2,15 @@
 // under CTest: random bytes, good frames with bytes flipped, cut short or
 // run together. No burst without a good frame may change a register, draw a
 // reply, or be counted other than as the host's decoder counts it. The
-// libFuzzer target fuzz_board_rx runs the same check on its own inputs.
+// libFuzzer targets run the same check on their own inputs: fuzz_board_rx
+// on the board twin (fuzz/board_rx_twin.hpp), fuzz_board_rx_rtl here.
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <random>
 
 #include "fuzz/board_rx.hpp"
+#include "fuzz/board_rx_twin.hpp"
 
 namespace mc::test {
 namespace {
@@ -85,6 +87,51 @@ TEST(BoardRx, NoBadFrameChangesTheBoard) {
       bursts, bytes, (unsigned long long)board.cycles(), (unsigned long long)board.good_bursts(),
       board.watched());
   EXPECT_LT(board.good_bursts(), uint64_t(bursts) / 10) << "the bursts were meant to be bad";
+}
+
+// The twin harness the fuzzer runs: the same bursts, many more of them.
+TEST(BoardRxTwin, NoBadFrameChangesTheBoard) {
+  fuzz::BoardRxTwin board;
+  std::mt19937 rng(11);
+  size_t bytes = 0;
+  int bursts = 0;
+  for (; bytes < 2000000; ++bursts) {
+    const hp::Bytes b = burst(rng);
+    bytes += b.size();
+    ASSERT_EQ(board.feed(b.data(), b.size()), "") << "burst " << bursts << " (" << b.size() << " bytes)";
+  }
+  std::printf("%d bursts, %zu bytes, %llu clocks stepped, %llu bursts held a good frame\n", bursts, bytes,
+              (unsigned long long)board.stepped(), (unsigned long long)board.good_bursts());
+  EXPECT_LT(board.good_bursts(), uint64_t(bursts) / 10) << "the bursts were meant to be bad";
+  EXPECT_GT(board.good_bursts(), 0u) << "some cut or flipped frames stay good (a flip in a payload byte "
+                                        "then in the CRC is rare, a dropped duplicate byte is not)";
+}
+
+// The check sees what a good frame does when it is told the burst held
+// none: a write changes a register and draws a reply; a segment changes the
+// queue; a bare reply-less change is reported too.
+TEST(BoardRxTwin, TheCheckSeesAChangedBoard) {
+  fuzz::BoardRxTwin board;
+  const auto fails_as_bad = [&](const hp::Frame& f) {
+    const hp::Bytes b = hp::encode(f);
+    EXPECT_EQ(board.feed(b.data(), b.size()), "") << "a good frame is allowed";
+    return board.feed(b.data(), b.size(), fuzz::BoardRxTwin::Expect::NoGoodFrame);
+  };
+  const std::string w = fails_as_bad(hp::write(9, br::WDOG, 5));
+  EXPECT_NE(w.find("register RAM word"), std::string::npos) << w;
+  EXPECT_NE(w.find("reply"), std::string::npos) << w;
+  const std::string r = fails_as_bad(hp::read(9, br::WDOG));
+  EXPECT_EQ(r.find("register RAM word"), std::string::npos) << r;
+  EXPECT_NE(r.find("reply"), std::string::npos) << r;
+  std::vector<seg::Words> segs(2);
+  for (auto& s : segs)
+    for (auto& x : s) x = 0x1234u;
+  const std::string q = fails_as_bad(hp::segments(9, segs));
+  EXPECT_NE(q.find("motion core"), std::string::npos) << q;
+  // A frame with its CRC flipped is bad for both: nothing to report.
+  hp::Bytes bad = hp::encode(hp::write(9, br::WDOG, 5));
+  bad.back() ^= 1;
+  EXPECT_EQ(board.feed(bad.data(), bad.size(), fuzz::BoardRxTwin::Expect::NoGoodFrame), "");
 }
 
 }  // namespace
