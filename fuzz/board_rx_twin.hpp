@@ -104,11 +104,11 @@ class BoardRxTwin {
       if (w != ra.sidx(br::LINK_CRC) && w != ra.sidx(br::LINK_JUNK) && ra.shadow[w] != rb.shadow[w])
         why += "register RAM word " + hex(uint32_t(w)) + " changed from " + hex(rb.shadow[w]) + " to " +
                hex(ra.shadow[w]) + "; ";
-    if (!(ra.r == rb.r)) why += "the register file's registers changed; ";
-    if (!(a_.u_ltx == b_.u_ltx) || !(a_.u_utx == b_.u_utx)) why += "the board sent a reply; ";
-    if (!(a_.u_safety == b_.u_safety)) why += "the safety block changed; ";
-    if (!(a_.u_core == b_.u_core)) why += "the motion core changed; ";
-    if (!(a_.u_hw == b_.u_hw) || a_.hb != b_.hb) why += "the handwheel or heartbeat changed; ";
+    if (ra.r != rb.r) why += "the register file's registers changed; ";
+    if (a_.u_ltx != b_.u_ltx || a_.u_utx != b_.u_utx) why += "the board sent a reply; ";
+    if (a_.u_safety != b_.u_safety) why += "the safety block changed; ";
+    if (a_.u_core != b_.u_core) why += "the motion core changed; ";
+    if (a_.u_hw != b_.u_hw || a_.hb != b_.hb) why += "the handwheel or heartbeat changed; ";
     return why;
   }
 

@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <climits>
 #include <cstdint>
-#include <iterator>
 
 #include "interp_core.hpp"
 #include "pid_core.hpp"
