@@ -17,7 +17,7 @@ namespace mc::board {
 // ---- protocol constants -------------------------------------------------
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
-constexpr uint8_t VERSION = 2;  // 2: a frame refused FULL is remembered; its copies get FULL
+constexpr uint8_t VERSION = 3;  // 3: POS, HW_POS read-only, 8-bit error counts; 2: FULL copies
 constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
@@ -215,16 +215,17 @@ constexpr std::array<RegDef, 32> REGS = {{
     {"IP_SET_X", reg::IP_SET_X, false, Access::RW, "position IP_CTRL.set loads, counts"},
     {"IP_SET_Y", reg::IP_SET_Y, false, Access::RW, "position IP_CTRL.set loads, counts"},
     {"IP_SET_Z", reg::IP_SET_Z, false, Access::RW, "position IP_CTRL.set loads, counts"},
-    {"HW_POS", reg::HW_POS, false, Access::RWL, "handwheel position, counts; write loads"},
+    {"HW_POS", reg::HW_POS, false, Access::R, "handwheel position, counts (wraps)"},
     {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks (above 15: 15), [8] reverse"},
     {"TLM_HDR", reg::TLM_HDR, false, Access::R, "[15:0] PID sample count, [31:16] FAULT"},
-    {"POS", reg::AX_POS, true, Access::RWL,
-     "encoder position at the last sample, counts; write loads the counter"},
+    {"POS", reg::AX_POS, true, Access::R,
+     "encoder position at the last sample, counts (from power-up; the host keeps offsets)"},
     {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW,
      "[7:0] filter clocks (above 15: 15), [8] reverse, [9] index clears"},
     {"IDX", reg::AX_IDX, true, Access::RWL, "index position latched, counts; write [0] arm, [1] disarm"},
     {"ENC_STAT", reg::AX_ENC_STAT, true, Access::RWL,
-     "[15:0] encoder errors, [16] error, [17] index armed, [18] index seen; write [0] clears errors"},
+     "[7:0] encoder errors (saturate at 255), [16] error, [17] index armed, [18] index seen; write [0] "
+     "clears errors"},
     {"CMD", reg::AX_CMD, true, Access::R, "command at the last sample, counts"},
     {"ERR", reg::AX_ERR, true, Access::R, "PID error at the last sample, counts"},
     {"OUT", reg::AX_OUT, true, Access::R,

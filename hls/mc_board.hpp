@@ -42,8 +42,8 @@ class McBoard {
   using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true>;  // IDX_RAM: as the board builds it
   using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD>;
   using Safety = McSafety<NAXES>;
-  using Handwheel = QuadDecoder<FILT_W, 2, 2, 2>;  // position only (the rest is trimmed)
-  static constexpr int HB_W = clog2(CLK_HZ);       // heartbeat counter bits
+  using Handwheel = QuadDecoder<FILT_W, 2, 2, 2, false, false>;  // position only, no load
+  static constexpr int HB_W = clog2(CLK_HZ);                     // heartbeat counter bits
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
 
   UartRx<CLK_HZ, BAUD> u_urx;
@@ -187,8 +187,6 @@ class McBoard {
         m.enc_filt[a] = rr.enc_filt_o[a];
         m.enc_dir_inv[a] = rr.enc_dir_inv_o >> a & 1;
         m.enc_idx_clr_en[a] = rr.enc_idx_clr_en_o >> a & 1;
-        m.enc_pos_load[a] = rr.enc_pos_load_o >> a & 1;
-        m.enc_pos_load_val[a] = int32_t(data);
         m.enc_idx_arm[a] = rr.enc_idx_arm_o >> a & 1;
         m.enc_idx_disarm[a] = rr.enc_idx_disarm_o >> a & 1;
         m.enc_err_clr[a] = rr.enc_err_clr_o >> a & 1;
@@ -241,7 +239,7 @@ class McBoard {
     const int ra = rr.ra >> 4 & 3;
     if (ra < NAXES) {
       const auto& d = u_core.decoder(ra);
-      ri.enc_err_cnt[ra] = uint16_t(d.err_cnt());
+      ri.enc_err_cnt[ra] = uint8_t(d.err_cnt());
       ri.enc_idx_pos[ra] = uint32_t(d.idx_pos());
       ri.drv_sel[ra] = armed ? uint16_t(u_core.drv_cmd(ra)) : 0;  // drv_allow low selects 0
     }
@@ -273,8 +271,6 @@ class McBoard {
     h.rst = in.rst;
     h.filt_len = rr.hw_filt_o;
     h.dir_inv = rr.hw_dir_inv_o;
-    h.pos_load = rr.hw_load_o;
-    h.pos_load_val = int32_t(data);
     h.a = in.hw_a;
     h.b = in.hw_b;
   }

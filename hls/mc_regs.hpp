@@ -39,7 +39,7 @@ struct McRegsIn {
   bool ip_busy = false, ip_underrun = false, ip_ovf = false;
   uint16_t ip_seg_cnt = 0;
   uint8_t enc_err = 0;
-  uint16_t enc_err_cnt[NAXES] = {};
+  uint8_t enc_err_cnt[NAXES] = {};
   uint32_t enc_idx_pos[NAXES] = {};
   uint8_t enc_idx_armed = 0, enc_idx_seen = 0;
   uint8_t drv_en = 0;
@@ -116,11 +116,11 @@ class McRegs {
     uint8_t ferr_o = 0;
     bool seg_wr_o = false, ip_abort_o = false, ip_hold_o = false, ip_clr_o = false;
     uint8_t enc_filt_o[NAXES] = {};  // FILT_W bits each
-    uint8_t enc_dir_inv_o = 0, enc_idx_clr_en_o = 0, enc_pos_load_o = 0;
+    uint8_t enc_dir_inv_o = 0, enc_idx_clr_en_o = 0;
     uint8_t enc_idx_arm_o = 0, enc_idx_disarm_o = 0, enc_err_clr_o = 0;
     uint8_t drv_ovr_o = 0, drv_ovr_we_o = 0;
     uint8_t hw_filt_o = 0;  // FILT_W bits
-    bool hw_dir_inv_o = false, hw_load_o = false;
+    bool hw_dir_inv_o = false;
     // walker and telemetry
     bool w_act = false, w_hdr = false, w_tlm = false, w_tlm_busy = false, w_end = false;
     uint8_t w_a = 0, w_k = 0, w_ptr = 0;  // 2, 3, 4 bits
@@ -161,7 +161,7 @@ class McRegs {
   bool pid_we_o(bool rst) const { return r.xs == X_PIDW && !rst; }
   bool pid_re_o() const { return r.xs == X_PIDR; }
   uint8_t pid_addr_o() const { return uint8_t(r.addr); }  // pid_waddr_o and pid_raddr_o
-  uint32_t data_o() const { return r.data; }  // seg_wdata, pid_wdata, enc_pos_load_val, hw_load_val
+  uint32_t data_o() const { return r.data; }              // seg_wdata, pid_wdata
   uint16_t drv_ovr_val_o() const { return uint16_t(r.data); }
   uint8_t ip_set_o() const { return (r.set_t2 & 4) ? uint8_t(1u << (r.set_t2 & 3) & 7) : uint8_t(0); }
   uint32_t ip_set_val_o() const { return r.sq; }
@@ -252,8 +252,8 @@ class McRegs {
     // Strobes and settings.
     n.arm_set_o = n.arm_clr_o = false;
     n.fclr_o = 0;
-    n.ip_abort_o = n.ip_clr_o = n.hw_load_o = false;
-    n.enc_pos_load_o = n.enc_idx_arm_o = n.enc_idx_disarm_o = n.enc_err_clr_o = n.drv_ovr_we_o = 0;
+    n.ip_abort_o = n.ip_clr_o = false;
+    n.enc_idx_arm_o = n.enc_idx_disarm_o = n.enc_err_clr_o = n.drv_ovr_we_o = 0;
     if (in.rst) {
       n.ip_hold_o = false;
       n.wdog_o = WDOG_RESET;
@@ -284,9 +284,6 @@ class McRegs {
             n.ip_abort_o = data >> bb::I_ABORT & 1;
             n.ip_clr_o = data >> bb::I_CLR & 1;
             break;
-          case br::HW_POS & 0x1F:
-            n.hw_load_o = true;
-            break;
           case br::HW_CFG & 0x1F:
             n.hw_filt_o = filt;
             n.hw_dir_inv_o = data >> bb::E_DIR_INV & 1;
@@ -298,9 +295,6 @@ class McRegs {
       if (w_ax) {
         const uint8_t m = uint8_t(1u << a_ax);
         switch (addr & 0xF) {
-          case br::AX_POS:
-            n.enc_pos_load_o |= m;
-            break;
           case br::AX_ENC_CFG:
             n.enc_filt_o[a_ax] = filt;
             n.enc_dir_inv_o = set_bit(n.enc_dir_inv_o, m, data >> bb::E_DIR_INV & 1);
@@ -596,8 +590,8 @@ class McRegs {
         r.cu_c2 != 4)
       return false;
     if (r.rv || r.seg_wr_o || r.arm_set_o || r.arm_clr_o || r.fclr_o != 0 || r.ip_abort_o || r.ip_clr_o ||
-        r.hw_load_o || r.enc_pos_load_o != 0 || r.enc_idx_arm_o != 0 || r.enc_idx_disarm_o != 0 ||
-        r.enc_err_clr_o != 0 || r.drv_ovr_we_o != 0 || r.ferr_o != 0)
+        r.enc_idx_arm_o != 0 || r.enc_idx_disarm_o != 0 || r.enc_err_clr_o != 0 || r.drv_ovr_we_o != 0 ||
+        r.ferr_o != 0)
       return false;
     if (r.set_t1 != r.set_n || r.set_t2 != r.set_n) return false;
     if (r.w_act || r.done_d != 0 || r.w_end || r.w_tlm_busy) return false;

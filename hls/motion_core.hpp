@@ -40,8 +40,6 @@ struct MotionIn {
   bool enc_latch[NAXES] = {};  // synchronous latch strobes (home switch, probe)
   uint32_t enc_filt[NAXES] = {};
   bool enc_dir_inv[NAXES] = {}, enc_idx_clr_en[NAXES] = {};
-  bool enc_pos_load[NAXES] = {};
-  int32_t enc_pos_load_val[NAXES] = {};
   bool enc_idx_arm[NAXES] = {}, enc_idx_disarm[NAXES] = {}, enc_err_clr[NAXES] = {};
   // drive control
   bool drv_allow[NAXES] = {};
@@ -90,7 +88,7 @@ class MotionCore {
   using In = MotionIn<NAXES>;
   using Out = MotionOut<NAXES>;
   using Pid = PidCoreClocked<NAXES>;
-  using Decoder = QuadDecoder<FILT_W, 16, 32, 16, IDX_RAM>;
+  using Decoder = QuadDecoder<FILT_W, 8, 32, 16, IDX_RAM, false>;  // errors to 255, no load
   static constexpr int latency = Pid::latency;
   // The sweep clock (Pid::sweep_clock) in which pid_core streams axis a's
   // output word, which the drive takes at that clock's edge: slot a + 1,
@@ -346,8 +344,6 @@ class MotionCore {
     qi.filt_len = in.enc_filt[a];
     qi.dir_inv = in.enc_dir_inv[a];
     qi.idx_clr_en = in.enc_idx_clr_en[a];
-    qi.pos_load = in.enc_pos_load[a];
-    qi.pos_load_val = in.enc_pos_load_val[a];
     qi.idx_arm = in.enc_idx_arm[a];
     qi.idx_disarm = in.enc_idx_disarm[a];
     qi.err_clr = in.enc_err_clr[a];

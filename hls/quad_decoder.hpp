@@ -59,8 +59,10 @@ constexpr uint32_t ones(int w) {
 }
 
 // IDX_RAM: the RTL's IDX_RAM parameter (the index latch in block RAM: its
-// output a clock later, not reset).
-template <int FILT_W = 8, int ERR_W = 16, int VEL_W = 32, int AGE_W = 16, bool IDX_RAM = false>
+// output a clock later, not reset); POS_LOAD: the RTL's POS_LOAD (false: no
+// position load, pos_load ignored).
+template <int FILT_W = 8, int ERR_W = 16, int VEL_W = 32, int AGE_W = 16, bool IDX_RAM = false,
+          bool POS_LOAD = true>
 class QuadDecoder {
   static_assert(FILT_W >= 1 && FILT_W <= 16, "quad_decoder: FILT_W must be 1..16");
   static_assert(ERR_W >= 2 && ERR_W <= 32, "quad_decoder: ERR_W must be 2..32");
@@ -128,7 +130,10 @@ class QuadDecoder {
     const bool idx_hit = r.idx_armed_o && (r.z_rise || in.latch);
 
     // Reset, then load, then the index clear, then counting.
-    n.pos_o = in.rst ? 0 : in.pos_load ? uint32_t(in.pos_load_val) : (idx_hit && in.idx_clr_en) ? 0 : pos_cnt;
+    n.pos_o = in.rst                       ? 0
+              : POS_LOAD && in.pos_load    ? uint32_t(in.pos_load_val)
+              : (idx_hit && in.idx_clr_en) ? 0
+                                           : pos_cnt;
 
     if constexpr (IDX_RAM) {
       n.idx_pos_o = r.idx_mem[r.idx_w];
@@ -198,10 +203,10 @@ class QuadDecoder {
   bool quiet(const QuadIn& in) const {
     const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
     const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
-    return !in.rst && !in.latch && !in.pos_load && !in.idx_arm && !in.idx_disarm && !in.err_clr &&
-           !in.sample && pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 &&
-           r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
-           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+    return !in.rst && !in.latch && !(POS_LOAD && in.pos_load) && !in.idx_arm && !in.idx_disarm &&
+           !in.err_clr && !in.sample && pins == r_.meta && pins == r_.sync && pins == r_.filt &&
+           r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step &&
+           !r_.qerr && !r_.z_rise && (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   void skip(uint32_t n) {
     r_.fwd = fwd_now(r_, false);  // what every quiet clock registers

@@ -2,7 +2,7 @@
 // Link protocol constants (P_), register addresses (R_; R_AX_ are offsets within an
 // axis's block) and register fields (B_). docs/protocol.md explains them.
 localparam [7:0] P_SYNC = 8'hA5;
-localparam [7:0] P_VERSION = 8'h02;
+localparam [7:0] P_VERSION = 8'h03;
 localparam integer P_HDR_BYTES = 4;
 localparam integer P_CRC_BYTES = 2;
 localparam integer P_MAX_LEN = 240;
@@ -54,9 +54,9 @@ localparam [3:0] R_AX_DRV = 4'h7;
 localparam [3:0] R_AX_FERR = 4'h8;
 localparam [3:0] R_AX_FOLLOW = 4'h9;
 localparam [15:0] R_GLOBAL_END = 16'h0116;
-localparam [31:0] R_GLOBAL_WMASK = 32'h001F23E0;
+localparam [31:0] R_GLOBAL_WMASK = 32'h001723E0;
 localparam [31:0] R_GLOBAL_SHADOW = 32'h001723C0;
-localparam [15:0] R_AX_WMASK = 16'h018F;
+localparam [15:0] R_AX_WMASK = 16'h018E;
 localparam [15:0] R_AX_SHADOW = 16'h0102;
 localparam [15:0] R_AXIS_BASE = 16'h0200;
 localparam [15:0] R_AXIS_STRIDE = 16'h0010;

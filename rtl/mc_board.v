@@ -133,18 +133,19 @@ module mc_board #(
   wire [            31:0] ip_set_val;
   wire [            15:0] ip_seg_cnt;
   wire [NAXES*FILT_W-1:0] enc_filt;
-  wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_pos_load, enc_idx_arm, enc_idx_disarm, enc_err_clr;
+  wire [       NAXES-1:0] enc_dir_inv, enc_idx_clr_en, enc_idx_arm, enc_idx_disarm, enc_err_clr;
   wire [       NAXES-1:0] enc_err, enc_idx_armed, enc_idx_seen;
-  wire [    NAXES*32-1:0] enc_pos_load_val, enc_idx_pos;
-  wire [    NAXES*16-1:0] enc_err_cnt, drv_sel;
+  wire [    NAXES*32-1:0] enc_idx_pos;
+  wire [     NAXES*8-1:0] enc_err_cnt;
+  wire [    NAXES*16-1:0] drv_sel;
   wire [            15:0] drv_ovr_val;
   wire [       NAXES-1:0] drv_ovr, drv_ovr_we, pid_en;
   wire [             4:0] smp_raddr;
   wire [            31:0] smp_rdata;
   wire                    done;
   wire [      FILT_W-1:0] hw_filt;
-  wire                    hw_dir_inv, hw_load;
-  wire [            31:0] hw_load_val, hw_pos;
+  wire                    hw_dir_inv;
+  wire [            31:0] hw_pos;
 
   mc_regs #(
       .NAXES  (NAXES),
@@ -210,8 +211,6 @@ module mc_board #(
       .enc_filt_o        (enc_filt),
       .enc_dir_inv_o     (enc_dir_inv),
       .enc_idx_clr_en_o  (enc_idx_clr_en),
-      .enc_pos_load_o    (enc_pos_load),
-      .enc_pos_load_val_o(enc_pos_load_val),
       .enc_idx_arm_o     (enc_idx_arm),
       .enc_idx_disarm_o  (enc_idx_disarm),
       .enc_err_clr_o     (enc_err_clr),
@@ -231,8 +230,6 @@ module mc_board #(
       .pid_en_i          (pid_en),
       .hw_filt_o         (hw_filt),
       .hw_dir_inv_o      (hw_dir_inv),
-      .hw_load_o         (hw_load),
-      .hw_load_val_o     (hw_load_val),
       .hw_pos_i          (hw_pos)
   );
 
@@ -308,8 +305,6 @@ module mc_board #(
       .enc_filt        (enc_filt),
       .enc_dir_inv     (enc_dir_inv),
       .enc_idx_clr_en  (enc_idx_clr_en),
-      .enc_pos_load    (enc_pos_load),
-      .enc_pos_load_val(enc_pos_load_val),
       .enc_idx_arm     (enc_idx_arm),
       .enc_idx_disarm  (enc_idx_disarm),
       .enc_err_clr     (enc_err_clr),
@@ -344,18 +339,19 @@ module mc_board #(
     if (HANDWHEEL != 0) begin : g_hw
   /* verilator lint_off PINCONNECTEMPTY */
   quad_decoder #(
-      .FILT_W(FILT_W),
-      .ERR_W (2),
-      .VEL_W (2),
-      .AGE_W (2)
+      .FILT_W  (FILT_W),
+      .ERR_W   (2),
+      .VEL_W   (2),
+      .AGE_W   (2),
+      .POS_LOAD(0)
   ) u_hw (
       .clk           (clk),
       .rst           (rst),
       .filt_len_i    (hw_filt),
       .dir_inv_i     (hw_dir_inv),
       .idx_clr_en_i  (1'b0),
-      .pos_load_i    (hw_load),
-      .pos_load_val_i(hw_load_val),
+      .pos_load_i    (1'b0),
+      .pos_load_val_i(32'd0),
       .idx_arm_i     (1'b0),
       .idx_disarm_i  (1'b0),
       .err_clr_i     (1'b0),
@@ -379,7 +375,7 @@ module mc_board #(
   /* verilator lint_on PINCONNECTEMPTY */
     end else begin : g_no_hw
       /* verilator lint_off UNUSEDSIGNAL */
-      wire unused_hw = &{hw_a_i, hw_b_i, hw_filt, hw_dir_inv, hw_load, hw_load_val};
+      wire unused_hw = &{hw_a_i, hw_b_i, hw_filt, hw_dir_inv};
       /* verilator lint_on UNUSEDSIGNAL */
       assign hw_pos = 32'd0;
     end

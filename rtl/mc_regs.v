@@ -106,13 +106,11 @@ module mc_regs #(
     output reg  [NAXES*FILT_W-1:0] enc_filt_o,
     output reg  [       NAXES-1:0] enc_dir_inv_o,
     output reg  [       NAXES-1:0] enc_idx_clr_en_o,
-    output reg  [       NAXES-1:0] enc_pos_load_o,
-    output wire [    NAXES*32-1:0] enc_pos_load_val_o,
     output reg  [       NAXES-1:0] enc_idx_arm_o,
     output reg  [       NAXES-1:0] enc_idx_disarm_o,
     output reg  [       NAXES-1:0] enc_err_clr_o,
     input  wire [       NAXES-1:0] enc_err_i,
-    input  wire [    NAXES*16-1:0] enc_err_cnt_i,
+    input  wire [     NAXES*8-1:0] enc_err_cnt_i,
     input  wire [    NAXES*32-1:0] enc_idx_pos_i,
     input  wire [       NAXES-1:0] enc_idx_armed_i,
     input  wire [       NAXES-1:0] enc_idx_seen_i,
@@ -130,8 +128,6 @@ module mc_regs #(
     // handwheel decoder
     output reg  [      FILT_W-1:0] hw_filt_o,
     output reg                     hw_dir_inv_o,
-    output reg                     hw_load_o,
-    output wire [            31:0] hw_load_val_o,
     input  wire [            31:0] hw_pos_i
 );
 
@@ -202,7 +198,7 @@ module mc_regs #(
   // before a read anyway).
   localparam integer PADN = 4 - NAXES;
   wire [127:0] p_idx = {{(PADN * 32) {1'b0}}, enc_idx_pos_i};
-  wire [63:0] p_ecnt = {{(PADN * 16) {1'b0}}, enc_err_cnt_i};
+  wire [31:0] p_ecnt = {{(PADN * 8) {1'b0}}, enc_err_cnt_i};
   wire [63:0] p_du = {{(PADN * 16) {1'b0}}, drv_sel_i};
   wire [3:0] p_seen = {{PADN{1'b0}}, enc_idx_seen_i};
   wire [3:0] p_armd = {{PADN{1'b0}}, enc_idx_armed_i};
@@ -216,7 +212,7 @@ module mc_regs #(
     if (ra[9]) begin
       case (ra_off)
         R_AX_IDX: live = p_idx[ra_ax*32+:32];
-        R_AX_ENC_STAT: live = {13'd0, p_seen[ra_ax], p_armd[ra_ax], p_eerr[ra_ax], p_ecnt[ra_ax*16+:16]};
+        R_AX_ENC_STAT: live = {13'd0, p_seen[ra_ax], p_armd[ra_ax], p_eerr[ra_ax], 8'd0, p_ecnt[ra_ax*8+:8]};
         // the sample RAM's OUT word has the rest (ORed in below)
         R_AX_OUT: live = {13'd0, p_den[ra_ax], 18'd0};
         R_AX_DRV: live = {15'd0, p_ovr[ra_ax], p_du[ra_ax*16+:16]};
@@ -329,7 +325,6 @@ module mc_regs #(
   assign pid_wdata_o = data;
   assign pid_re_o    = xs == X_PIDR;
   assign pid_raddr_o = addr[7:0];
-  assign enc_pos_load_val_o = {NAXES{data}};
 
   // The filter-length field is 8 bits in the register map whatever the
   // decoders are built with: a longer value than FILT_W bits hold becomes
@@ -338,7 +333,6 @@ module mc_regs #(
   /* verilator lint_off WIDTH */
   wire [FILT_W-1:0] filt_len = (filt_field >> FILT_W) != 8'd0 ? {FILT_W{1'b1}} : filt_field[FILT_W-1:0];
   /* verilator lint_on WIDTH */
-  assign hw_load_val_o = data;
   assign drv_ovr_val_o = data[B_D_VAL_LSB+:16];
 
   // The checks of a frame that need no payload.
@@ -418,8 +412,6 @@ module mc_regs #(
     fclr_o           <= 16'd0;
     ip_abort_o       <= 1'b0;
     ip_clr_o         <= 1'b0;
-    hw_load_o        <= 1'b0;
-    enc_pos_load_o   <= {NAXES{1'b0}};
     enc_idx_arm_o    <= {NAXES{1'b0}};
     enc_idx_disarm_o <= {NAXES{1'b0}};
     enc_err_clr_o    <= {NAXES{1'b0}};
@@ -452,7 +444,6 @@ module mc_regs #(
             ip_abort_o <= data[B_I_ABORT];
             ip_clr_o   <= data[B_I_CLR];
           end
-          R_HW_POS[4:0]: hw_load_o <= 1'b1;
           R_HW_CFG[4:0]: begin
             hw_filt_o    <= filt_len;
             hw_dir_inv_o <= data[B_E_DIR_INV];
@@ -463,7 +454,6 @@ module mc_regs #(
       for (ax = 0; ax < NAXES; ax = ax + 1) begin
         if (w_ax && a_ax == ax[1:0]) begin
           case (addr[3:0])
-            R_AX_POS: enc_pos_load_o[ax] <= 1'b1;
             R_AX_ENC_CFG: begin
               enc_filt_o[ax*FILT_W+:FILT_W] <= filt_len;
               enc_dir_inv_o[ax]    <= data[B_E_DIR_INV];

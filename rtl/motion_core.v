@@ -6,7 +6,8 @@
 //
 // How to drive it:
 // - Configure the PID through pid_* (pid_core's port, rtl/pid_regs.vh), the
-//   decoders through enc_* (quad_decoder's ports, one slice per axis), and
+//   decoders through enc_* (quad_decoder's ports, one slice per axis: no
+//   position load, the host keeps offsets; errors counted to 255), and
 //   queue segments through seg_wr/seg_wdata (interp_core's port; set the
 //   position with ip_set, a strobe per axis, while the interpolator is idle).
 // - The PID samples cmd/pos at tick, for all axes at once, and the decoders
@@ -85,14 +86,12 @@ module motion_core #(
     input  wire [NAXES*FILT_W-1:0] enc_filt,
     input  wire [     NAXES-1:0] enc_dir_inv,
     input  wire [     NAXES-1:0] enc_idx_clr_en,
-    input  wire [     NAXES-1:0] enc_pos_load,
-    input  wire [  NAXES*32-1:0] enc_pos_load_val,
     input  wire [     NAXES-1:0] enc_idx_arm,
     input  wire [     NAXES-1:0] enc_idx_disarm,
     input  wire [     NAXES-1:0] enc_err_clr,
     // encoder status
     output wire [     NAXES-1:0] enc_err,
-    output wire [  NAXES*16-1:0] enc_err_cnt,
+    output wire [   NAXES*8-1:0] enc_err_cnt,
     output wire [  NAXES*32-1:0] enc_idx_pos,
     output wire [     NAXES-1:0] enc_idx_armed,
     output wire [     NAXES-1:0] enc_idx_seen,
@@ -164,18 +163,19 @@ module motion_core #(
     for (g = 0; g < NAXES; g = g + 1) begin : g_enc
       /* verilator lint_off PINCONNECTEMPTY */
       quad_decoder #(
-          .FILT_W (FILT_W),
-          .ERR_W  (16),
-          .VEL_W  (32),
-          .IDX_RAM(IDX_RAM)
+          .FILT_W  (FILT_W),
+          .ERR_W   (8),
+          .VEL_W   (32),
+          .IDX_RAM (IDX_RAM),
+          .POS_LOAD(0)
       ) u_dec (
           .clk           (clk),
           .rst           (rst),
           .filt_len_i    (enc_filt[g*FILT_W+:FILT_W]),
           .dir_inv_i     (enc_dir_inv[g]),
           .idx_clr_en_i  (enc_idx_clr_en[g]),
-          .pos_load_i    (enc_pos_load[g]),
-          .pos_load_val_i(enc_pos_load_val[g*32+:32]),
+          .pos_load_i    (1'b0),
+          .pos_load_val_i(32'd0),
           .idx_arm_i     (enc_idx_arm[g]),
           .idx_disarm_i  (enc_idx_disarm[g]),
           .err_clr_i     (enc_err_clr[g]),
@@ -189,7 +189,7 @@ module motion_core #(
           .idx_armed_o   (enc_idx_armed[g]),
           .idx_seen_o    (enc_idx_seen[g]),
           .err_o         (enc_err[g]),
-          .err_cnt_o     (enc_err_cnt[g*16+:16]),
+          .err_cnt_o     (enc_err_cnt[g*8+:8]),
           .vel_o         (enc_vel[g*32+:32]),
           .age_o         (),
           .a_o           (),

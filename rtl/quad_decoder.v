@@ -17,6 +17,8 @@
 //   reverses that), and wraps modulo 2^32: take differences in 32-bit
 //   arithmetic. Strobe pos_load_i to set it to pos_load_val_i (0 to clear);
 //   an edge counted in that clock is dropped from pos_o, not from vel_o.
+//   With POS_LOAD = 0 there is no load (the board keeps offsets in the host
+//   instead: 32 multiplexer LUTs fewer per decoder) and pos_load_i is ignored.
 // - Index, LinuxCNC index-enable style: strobe idx_arm_i; idx_armed_o stays
 //   high until the next rising edge of the filtered Z, which latches the
 //   position (this clock's edge included) into idx_pos_o, sets idx_seen_o and
@@ -47,7 +49,8 @@ module quad_decoder #(
     parameter integer ERR_W  = 16,  // error counter width, bits (saturates)
     parameter integer VEL_W  = 32,  // velocity width, bits (counts per sample, saturates)
     parameter integer AGE_W  = 16,  // edge age width, bits (clocks, saturates)
-    parameter integer IDX_RAM = 0   // 1: the index latch in block RAM (see above)
+    parameter integer IDX_RAM = 0,  // 1: the index latch in block RAM (see above)
+    parameter integer POS_LOAD = 1  // 0: no position load (see above)
 ) (
     // clock and reset
     input  wire              clk,
@@ -189,10 +192,18 @@ module quad_decoder #(
   // value is the one it expects to read back.
   always @(posedge clk) begin
     if (rst) pos_o <= 32'd0;
-    else if (pos_load_i) pos_o <= pos_load_val_i;
+    else if (POS_LOAD != 0 && pos_load_i) pos_o <= pos_load_val_i;
     else if (idx_hit && idx_clr_en_i) pos_o <= 32'd0;
     else pos_o <= pos_cnt;
   end
+
+  generate
+    if (POS_LOAD == 0) begin : g_no_load
+      /* verilator lint_off UNUSEDSIGNAL */
+      wire unused = &{1'b0, pos_load_i, pos_load_val_i};
+      /* verilator lint_on UNUSEDSIGNAL */
+    end
+  endgenerate
 
   // The latched position is the one that becomes 0 with idx_clr_en_i, so
   // idx_pos_o is exactly the offset between the old and the new count.

@@ -49,12 +49,15 @@ TEST(BoardRtl, IdentityAndRegisterRoundTrips) {
   tb.write(pid_reg::addr(1, pid_reg::KP), 0x05123456);
   EXPECT_EQ(tb.read(pid_reg::addr(1, pid_reg::KP)), 0x05123456u);
   EXPECT_EQ(tb.read(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_NAXES)), 3u);
-  // Loading an encoder position shows at the next sample.
-  tb.write(ax(2, br::AX_POS), 12345);
-  tb.run(200);
-  EXPECT_EQ(tb.read(ax(2, br::AX_POS)), 12345u);
-  tb.write(br::HW_POS, uint32_t(-77));
-  EXPECT_EQ(tb.read(br::HW_POS), uint32_t(-77));
+  // The encoders count from power-up: POS and HW_POS are read-only (the
+  // host keeps offsets), a write is refused and changes nothing.
+  for (uint16_t r : {ax(2, br::AX_POS), br::HW_POS}) {
+    auto w = tb.transact(hp::write(tb.next_seq(), r, 12345));
+    ASSERT_TRUE(w);
+    EXPECT_EQ(w->status, bp::ST_BAD_REG) << std::hex << r;
+    tb.run(200);
+    EXPECT_EQ(tb.read(r), 0u) << std::hex << r;
+  }
 }
 
 TEST(BoardRtl, RefusedCommandsAreCountedAndNotApplied) {
@@ -390,9 +393,13 @@ TEST(BoardRtl, IpSetLoadsEachAxisCommand) {
     EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_CMD))), v[a]) << a;
     EXPECT_EQ(int32_t(tb.read(ax(a, br::AX_FOLLOW))), v[a]) << a;  // the encoders are at 0
   }
-  // FOLLOW saturates: -2^31 + 1 - (2^31 - 1) is below the 32-bit range.
-  tb.write(ax(2, br::AX_POS), 0x7FFFFFFFu);
+  // FOLLOW saturates: -2^31 + 1 - 2 is below the 32-bit range. Z's encoder
+  // moves two counts forward (AB 00, 10, 11).
+  tb.pins().Z_ENC_A = 1;
+  tb.run(20);
+  tb.pins().Z_ENC_B = 1;
   tb.run(200);
+  EXPECT_EQ(tb.read(ax(2, br::AX_POS)), 2u);
   EXPECT_EQ(tb.read(ax(2, br::AX_FOLLOW)), 0x80000000u);
   // Again with new values, and clear in the same write.
   for (int a = 0; a < 3; ++a) tb.write(uint16_t(br::IP_SET_X + a), uint32_t(-v[a] / 2));

@@ -171,9 +171,8 @@ class Host {
         if (chance(4)) {  // a following error of exactly FERR, or one more: the trip's edge
           const int32_t v = int32_t(irange(0, 12)) - 6;
           then(hp::write(seq_++, br::IP_CTRL, 1u << bb::I_ABORT));
-          then(hp::write(seq_++, uint16_t(br::IP_SET_X + a), 0));
-          then(hp::write(seq_++, br::IP_CTRL, 1u << bb::I_SET));  // command 0
-          then(hp::write(seq_++, br::axis(a, br::AX_POS), uint32_t(v)));
+          then(hp::write(seq_++, uint16_t(br::IP_SET_X + a), uint32_t(v)));
+          then(hp::write(seq_++, br::IP_CTRL, 1u << bb::I_SET));  // command v: FOLLOW v - POS
           then(hp::write(seq_++, br::axis(a, br::AX_FERR), uint32_t(std::abs(v)) - irange(0, 1)));
         }
         then(hp::write(seq_++, br::FAULT, 0xFFFF));
@@ -813,7 +812,6 @@ std::string state_diff(const Twin& x, const Twin& y) {
   for (int a = 0; a < 3; ++a) SAMER(enc_filt_o[a]);
   SAMER(enc_dir_inv_o);
   SAMER(enc_idx_clr_en_o);
-  SAMER(enc_pos_load_o);
   SAMER(enc_idx_arm_o);
   SAMER(enc_idx_disarm_o);
   SAMER(enc_err_clr_o);
@@ -821,7 +819,6 @@ std::string state_diff(const Twin& x, const Twin& y) {
   SAMER(drv_ovr_we_o);
   SAMER(hw_filt_o);
   SAMER(hw_dir_inv_o);
-  SAMER(hw_load_o);
   SAMER(w_act);
   SAMER(w_hdr);
   SAMER(w_tlm);

@@ -220,8 +220,6 @@ void random_run(uint32_t seed, uint64_t cycles) {
     in.ip_jog_neg = rng() % 2;
     // Encoders and drive.
     for (int a = 0; a < N; ++a) {
-      in.enc_pos_load[a] = rng() % 30000 == 0;
-      in.enc_pos_load_val[a] = int32_t(rng());
       in.enc_idx_arm[a] = rng() % 4000 == 0;
       in.enc_idx_disarm[a] = rng() % 20000 == 0;
       in.enc_err_clr[a] = rng() % 5000 == 0;

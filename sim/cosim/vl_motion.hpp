@@ -28,8 +28,8 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   for (int a = 0; a < 3; ++a) vl::put32(d.ip_set_pos, a, uint32_t(in.ip_set_pos[a]));
   d.ip_jog = in.ip_jog;
   d.ip_jog_neg = in.ip_jog_neg;
-  uint32_t ea = 0, eb = 0, ez = 0, elat = 0, dinv = 0, iclr = 0, pl = 0, arm = 0, dis = 0, eclr = 0,
-           allow = 0, ovr = 0, ovw = 0;
+  uint32_t ea = 0, eb = 0, ez = 0, elat = 0, dinv = 0, iclr = 0, arm = 0, dis = 0, eclr = 0, allow = 0,
+           ovr = 0, ovw = 0;
   uint64_t filt = 0;
   for (int a = 0; a < N; ++a) {
     ea |= uint32_t(in.enc_a[a]) << a;
@@ -39,8 +39,6 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
     filt |= uint64_t(in.enc_filt[a] & 0xFF) << (8 * a);
     dinv |= uint32_t(in.enc_dir_inv[a]) << a;
     iclr |= uint32_t(in.enc_idx_clr_en[a]) << a;
-    pl |= uint32_t(in.enc_pos_load[a]) << a;
-    vl::put32(d.enc_pos_load_val, a, uint32_t(in.enc_pos_load_val[a]));
     arm |= uint32_t(in.enc_idx_arm[a]) << a;
     dis |= uint32_t(in.enc_idx_disarm[a]) << a;
     eclr |= uint32_t(in.enc_err_clr[a]) << a;
@@ -55,7 +53,6 @@ void apply_inputs(Model& d, const MotionIn<N>& in) {
   vl::set(d.enc_filt, filt);
   vl::set(d.enc_dir_inv, dinv);
   vl::set(d.enc_idx_clr_en, iclr);
-  vl::set(d.enc_pos_load, pl);
   vl::set(d.enc_idx_arm, arm);
   vl::set(d.enc_idx_disarm, dis);
   vl::set(d.enc_err_clr, eclr);
@@ -95,7 +92,7 @@ MotionOut<N> read_outputs(const Model& d) {
     QuadOut& e = o.enc[a];
     e.pos = o.pos[a];
     e.err = (d.enc_err >> a) & 1;
-    e.err_cnt = vl::get_bits(d.enc_err_cnt, 16 * a, 16);
+    e.err_cnt = vl::get_bits(d.enc_err_cnt, 8 * a, 8);
     e.idx_pos = int32_t(vl::get_bits(d.enc_idx_pos, 32 * a, 32));
     e.idx_armed = (d.enc_idx_armed >> a) & 1;
     e.idx_seen = (d.enc_idx_seen >> a) & 1;
