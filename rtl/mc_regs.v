@@ -335,6 +335,16 @@ module mc_regs #(
   /* verilator lint_on WIDTH */
   assign drv_ovr_val_o = data[B_D_VAL_LSB+:16];
 
+  // The same checks a clock early, for X_DECIDE: addr is complete in the
+  // clock X_FETCH ends, and the decode chain into the executor's state was
+  // the board's longest path.
+  reg        d_ok, d_pid, d_shadow;
+  always @(posedge clk) begin
+    d_ok     <= f_cmd == P_CMD_READ ? rd_ok : wr_ok;
+    d_pid    <= is_pid;
+    d_shadow <= rd_shadow;
+  end
+
   // The checks of a frame that need no payload.
   reg [7:0] chk;
   always @(*) begin
@@ -551,7 +561,7 @@ module mc_regs #(
             last_valid <= 1'b1;
             last_full  <= 1'b0;
             xs         <= X_RD;
-          end else if (f_cmd == P_CMD_READ ? !rd_ok : !wr_ok) begin
+          end else if (!d_ok) begin
             status      <= P_ST_BAD_REG;
             cnt_nak_inc <= 1'b1;
             val_direct  <= 1'b1;
@@ -568,10 +578,10 @@ module mc_regs #(
             end
             if (f_cmd == P_CMD_WRITE) begin
               val_direct <= 1'b1;
-              xs         <= dup ? X_REPLY : (is_pid ? X_PIDW : X_APPLY);
+              xs         <= dup ? X_REPLY : (d_pid ? X_PIDW : X_APPLY);
             end else begin
-              val_shadow <= ~is_pid & rd_shadow;
-              xs         <= is_pid ? X_PIDR : X_RD;
+              val_shadow <= ~d_pid & d_shadow;
+              xs         <= d_pid ? X_PIDR : X_RD;
             end
           end
         end
