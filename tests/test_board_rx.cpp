@@ -70,18 +70,29 @@ hp::Bytes burst(std::mt19937& rng) {
   return b;
 }
 
+// Feeds bursts (seed 11) to a harness until at least `limit` bytes have gone
+// in; each must leave the board as the quiet line does (feed() says why not).
+struct Fed {
+  int bursts = 0;
+  size_t bytes = 0;
+};
+template <class Board>
+void feed_bursts(Board& board, size_t limit, Fed& fed) {
+  std::mt19937 rng(11);
+  for (; fed.bytes < limit; ++fed.bursts) {
+    const hp::Bytes b = burst(rng);
+    fed.bytes += b.size();
+    ASSERT_EQ(board.feed(b.data(), b.size()), "") << "burst " << fed.bursts << " (" << b.size() << " bytes)";
+  }
+}
+
 TEST(BoardRx, NoBadFrameChangesTheBoard) {
   fuzz::BoardRx board(7);
-  std::mt19937 rng(11);
-  size_t bytes = 0;
-  int bursts = 0;
+  Fed fed;
   // A bounded run: 20 k bytes or more, some seconds of simulation.
-  for (; bytes < 20000; ++bursts) {
-    const hp::Bytes b = burst(rng);
-    bytes += b.size();
-    const std::string why = board.feed(b.data(), b.size());
-    ASSERT_EQ(why, "") << "burst " << bursts << " (" << b.size() << " bytes)";
-  }
+  ASSERT_NO_FATAL_FAILURE(feed_bursts(board, 20000, fed));
+  const int bursts = fed.bursts;
+  const size_t bytes = fed.bytes;
   std::printf(
       "%d bursts, %zu bytes, %llu board clocks, %llu bursts held a good frame, %zu registers watched\n",
       bursts, bytes, (unsigned long long)board.cycles(), (unsigned long long)board.good_bursts(),
@@ -92,14 +103,10 @@ TEST(BoardRx, NoBadFrameChangesTheBoard) {
 // The twin harness the fuzzer runs: the same bursts, many more of them.
 TEST(BoardRxTwin, NoBadFrameChangesTheBoard) {
   fuzz::BoardRxTwin board;
-  std::mt19937 rng(11);
-  size_t bytes = 0;
-  int bursts = 0;
-  for (; bytes < 2000000; ++bursts) {
-    const hp::Bytes b = burst(rng);
-    bytes += b.size();
-    ASSERT_EQ(board.feed(b.data(), b.size()), "") << "burst " << bursts << " (" << b.size() << " bytes)";
-  }
+  Fed fed;
+  ASSERT_NO_FATAL_FAILURE(feed_bursts(board, 2000000, fed));
+  const int bursts = fed.bursts;
+  const size_t bytes = fed.bytes;
   std::printf("%d bursts, %zu bytes, %llu clocks stepped, %llu bursts held a good frame\n", bursts, bytes,
               (unsigned long long)board.stepped(), (unsigned long long)board.good_bursts());
   EXPECT_LT(board.good_bursts(), uint64_t(bursts) / 10) << "the bursts were meant to be bad";
