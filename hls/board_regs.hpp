@@ -17,7 +17,7 @@ namespace mc::board {
 // ---- protocol constants -------------------------------------------------
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
-constexpr uint8_t VERSION = 3;  // 3: POS, HW_POS read-only, 8-bit error counts; 2: FULL copies
+constexpr uint8_t VERSION = 4;  // 4: machine I/O; 3: POS, HW_POS read-only, 8-bit error counts
 constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
@@ -69,7 +69,13 @@ constexpr uint16_t IP_SET_Z = 0x0112;
 constexpr uint16_t HW_POS = 0x0113;
 constexpr uint16_t HW_CFG = 0x0114;
 constexpr uint16_t TLM_HDR = 0x0115;
-constexpr uint16_t GLOBAL_END = 0x0116;  // first unused global address
+constexpr uint16_t IO_CTRL = 0x0116;
+constexpr uint16_t LATCH = 0x0117;
+constexpr uint16_t MPG = 0x0118;
+constexpr uint16_t MPG_INC = 0x0119;
+constexpr uint16_t STEP_CFG = 0x011A;
+constexpr uint16_t IO_STAT = 0x011B;
+constexpr uint16_t GLOBAL_END = 0x011C;  // first unused global address (at most 0x0120)
 // Per-axis registers: AXIS_BASE + axis * AXIS_STRIDE + offset.
 constexpr uint16_t AXIS_BASE = 0x0200;
 constexpr uint16_t AXIS_STRIDE = 0x10;
@@ -164,6 +170,41 @@ constexpr int O_DRV_EN = 18;
 // AX_DRV
 constexpr int D_VAL_LSB = 0;  // 16 bits, signed
 constexpr int D_OVR = 16;
+// IO_CTRL: spindle and coolant (all off while the drives are disarmed)
+constexpr int IO_SPINDLE = 0;
+constexpr int IO_SPINDLE_REV = 1;
+constexpr int IO_FLOOD = 2;
+constexpr int IO_MIST = 3;
+constexpr int IO_MIST_ON_DIR = 4;  // the spindle-direction pin carries the mist output
+constexpr int IO_DUTY_LSB = 16;    // 10 bits: spindle PWM duty, of 1023 (1023: always on)
+constexpr int IO_DUTY_BITS = 10;
+// LATCH: what latches each axis's position (AX_IDX, armed by AX_IDX.arm)
+constexpr int L_SRC_LSB = 0;  // 2 bits per axis
+constexpr uint32_t L_SRC_INDEX = 0, L_SRC_HOME = 1, L_SRC_PROBE = 2, L_SRC_NONE = 3;
+constexpr int L_PROBE_INV = 8;  // the probe input is active low
+constexpr int L_STOP = 9;       // a latch also stops the interpolator and flushes its queue
+constexpr int L_FILT_LSB = 12;  // 4 bits: probe and home-switch filter, clocks
+// MPG: handwheel jog
+constexpr int M_ON = 0;
+constexpr int M_AXIS_LSB = 1;  // 2 bits
+constexpr int M_STEP_LSB = 3;  // 2 bits: counts per detent 1, 10, 100, MPG_INC
+constexpr int M_DETENT1 = 5;   // a detent is one count (else four: one quadrature cycle)
+constexpr int M_RATE_LSB = 16;  // 16 bits: clocks per count moved (below 16: 16)
+constexpr int MPG_MIN_RATE = 16;
+constexpr int MPG_STEPS[3] = {1, 10, 100};
+// STEP_CFG: stepper axes
+constexpr int SC_STEPPER_LSB = 0;  // one bit per axis: step/dir on the PWM/DIR pins
+constexpr int SC_CLOSED_LSB = 4;   // one bit per axis: POS from the encoder (else the steps sent)
+constexpr int SC_PW_LSB = 8;       // 6 bits: step pulse clocks (0: 1); low at least one more
+constexpr int SC_SETUP_LSB = 16;   // 6 bits: direction-to-step setup clocks (0: 1)
+constexpr int SC_TIME_BITS = 6;
+constexpr int SC_STEP_INV_LSB = 24;  // one bit per axis: the step pin pulses low
+constexpr int SC_DIR_INV_LSB = 28;   // one bit per axis: the direction pin reversed
+// IO_STAT
+constexpr int IOS_PROBE = 0;          // probe input, filtered, active high
+constexpr int IOS_HOME_LSB = 1;       // one bit per axis: home switches (the limit inputs), filtered
+constexpr int IOS_STEP_ERR_LSB = 4;   // one bit per axis: the step generator could not follow
+constexpr int IOS_MPG_PEND_LSB = 16;  // 16 bits, signed: handwheel counts still to move
 }  // namespace bits
 
 // Reset values of the writable registers (what a read returns before a write).
@@ -187,7 +228,7 @@ struct RegDef {
   const char* doc;
 };
 
-constexpr std::array<RegDef, 32> REGS = {{
+constexpr std::array<RegDef, 38> REGS = {{
     {"ID", reg::ID, false, Access::R, "0x4D43 (\"MC\") << 16 | protocol version"},
     {"INFO", reg::INFO, false, Access::R, "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version"},
     {"CLK_HZ", reg::CLK_HZ, false, Access::R, "clock frequency, Hz"},
@@ -218,6 +259,22 @@ constexpr std::array<RegDef, 32> REGS = {{
     {"HW_POS", reg::HW_POS, false, Access::R, "handwheel position, counts (wraps)"},
     {"HW_CFG", reg::HW_CFG, false, Access::RW, "handwheel [7:0] filter clocks (above 15: 15), [8] reverse"},
     {"TLM_HDR", reg::TLM_HDR, false, Access::R, "[15:0] PID sample count, [31:16] FAULT"},
+    {"IO_CTRL", reg::IO_CTRL, false, Access::RW,
+     "[0] spindle on, [1] spindle reverse, [2] flood, [3] mist, [4] mist on the spindle-direction pin, "
+     "[25:16] spindle PWM duty of 1023; all off while disarmed"},
+    {"LATCH", reg::LATCH, false, Access::RW,
+     "[1:0], [3:2], [5:4] what latches axis X, Y, Z (AX_IDX): 0 index, 1 home switch, 2 probe, 3 none; "
+     "[8] probe active low, [9] a latch stops the interpolator, [15:12] switch filter clocks"},
+    {"MPG", reg::MPG, false, Access::RW,
+     "handwheel jog: [0] on, [2:1] axis, [4:3] counts per detent 1, 10, 100, MPG_INC, [5] one count "
+     "per detent (else 4), [31:16] clocks per count moved (at least 16)"},
+    {"MPG_INC", reg::MPG_INC, false, Access::RW, "[15:0] counts per detent with MPG step 3"},
+    {"STEP_CFG", reg::STEP_CFG, false, Access::RW,
+     "[2:0] stepper axes, [6:4] closed loop (POS from the encoder), [13:8] step pulse clocks, "
+     "[21:16] direction setup clocks, [26:24] step active low, [30:28] direction reversed"},
+    {"IO_STAT", reg::IO_STAT, false, Access::R,
+     "[0] probe, [3:1] home switches (filtered, active high), [6:4] step errors, [31:16] handwheel "
+     "counts to move (signed)"},
     {"POS", reg::AX_POS, true, Access::R,
      "encoder position at the last sample, counts (from power-up; the host keeps offsets)"},
     {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW,

@@ -1,6 +1,7 @@
 // mc_board: the portable board core: motion_core plus the link (UART,
-// framed protocol, register file), the safety logic, a handwheel decoder
-// and the status LEDs. The pins reach it through the board top
+// framed protocol, register file), the safety logic, a handwheel decoder,
+// the machine I/O (mc_io: probe and home latches, spindle, coolant,
+// handwheel jog), the stepper axes (mc_step) and the status LEDs. The pins reach it through the board top
 // (rtl/motioncore_icebreaker.v), which synchronizes every input but the
 // encoders (the decoders synchronize those) and makes the reset.
 //
@@ -37,14 +38,25 @@ module mc_board #(
     input  wire [NAXES-1:0] lim_i,
     input  wire             estop_i,
     input  wire             stop_i,
-    // H-bridges
+    input  wire             probe_i,
+    // H-bridges, or step/dir for stepper axes
     output wire [NAXES-1:0] pwm_o,
     output wire [NAXES-1:0] dir_o,
     output wire [NAXES-1:0] drv_en_o,
+    // spindle and coolant
+    output wire             sp_pwm_o,
+    output wire             sp_en_o,
+    output wire             sp_dir_o,
+    output wire             flood_o,
+    output wire             mist_o,
     // LEDs, active high
     output wire             led_ok_o,
     output wire             led_fault_o
 );
+
+  /* verilator lint_off UNUSEDPARAM */
+`include "board_regs.vh"
+  /* verilator lint_on UNUSEDPARAM */
 
   // ---------------------------------------------------------------------
   // Link: UART, frame parser, frame sender.
@@ -146,6 +158,13 @@ module mc_board #(
   wire [      FILT_W-1:0] hw_filt;
   wire                    hw_dir_inv;
   wire [            31:0] hw_pos;
+  wire                    bus_we;
+  wire [             4:0] bus_addr;
+  wire [            31:0] bus_wdata, io_stat_io, io_stat;
+  wire [       NAXES-1:0] step_ferr, step_err, stepper, io_latch;
+  wire                    io_stop, ip_jog_neg;
+  wire [             2:0] ip_jog;
+  wire [       NAXES-1:0] core_pwm, core_dir, core_en, enc_a_c, enc_b_c;
 
   mc_regs #(
       .NAXES  (NAXES),
@@ -230,7 +249,11 @@ module mc_board #(
       .pid_en_i          (pid_en),
       .hw_filt_o         (hw_filt),
       .hw_dir_inv_o      (hw_dir_inv),
-      .hw_pos_i          (hw_pos)
+      .hw_pos_i          (hw_pos),
+      .bus_we_o          (bus_we),
+      .bus_addr_o        (bus_addr),
+      .bus_wdata_o       (bus_wdata),
+      .io_stat_i         (io_stat)
   );
 
   mc_safety #(
@@ -247,7 +270,7 @@ module mc_board #(
       .estop_i    (estop_i),
       .stop_i     (stop_i),
       .lim_i      (lim_i),
-      .ferr_i     (ferr),
+      .ferr_i     (ferr | step_ferr),
       .enc_err_i  (enc_err),
       .fault_o    (fault),
       .armed_o    (armed),
@@ -287,21 +310,21 @@ module mc_board #(
       .seg_wr          (seg_wr),
       .seg_wdata       (seg_wdata),
       .seg_count       (seg_count),
-      .ip_abort        (ip_abort),
+      .ip_abort        (ip_abort | io_stop),
       .ip_hold         (ip_hold | ~armed),
       .ip_clr          (ip_clr),
       .ip_set          (ip_set),
       .ip_set_pos      ({3{ip_set_val}}),  // one value, an axis at a time
-      .ip_jog          (3'd0),  // the handwheel jog: not wired on this board yet
-      .ip_jog_neg      (1'b0),
+      .ip_jog          (ip_jog),
+      .ip_jog_neg      (ip_jog_neg),
       .ip_busy         (ip_busy),
       .ip_underrun     (ip_underrun),
       .ip_ovf          (ip_ovf),
       .ip_seg_cnt      (ip_seg_cnt),
-      .enc_a           (enc_a_i),
-      .enc_b           (enc_b_i),
+      .enc_a           (enc_a_c),
+      .enc_b           (enc_b_c),
       .enc_z           (enc_z_i),
-      .enc_latch       ({NAXES{1'b0}}),  // home/probe latch strobes: not wired yet
+      .enc_latch       (io_latch),
       .enc_filt        (enc_filt),
       .enc_dir_inv     (enc_dir_inv),
       .enc_idx_clr_en  (enc_idx_clr_en),
@@ -318,9 +341,9 @@ module mc_board #(
       .drv_ovr         (drv_ovr),
       .drv_ovr_we      (drv_ovr_we),
       .drv_ovr_val     (drv_ovr_val),
-      .pwm_o           (pwm_o),
-      .dir_o           (dir_o),
-      .drv_en_o        (drv_en_o),
+      .pwm_o           (core_pwm),
+      .dir_o           (core_dir),
+      .drv_en_o        (core_en),
       .drv_u           (drv_u),
       .drv_sel         (drv_sel),
       .tick            (tick),
@@ -333,6 +356,76 @@ module mc_board #(
       .pos             (pos_live),
       .cmd             (cmd_live)
   );
+
+  // ---------------------------------------------------------------------
+  // Machine I/O and stepper axes, on the register file's write bus.
+  mc_io #(
+      .NAXES(NAXES)
+  ) u_io (
+      .clk        (clk),
+      .rst        (rst),
+      .bus_we_i   (bus_we),
+      .bus_addr_i (bus_addr),
+      .bus_wdata_i(bus_wdata),
+      .stat_o     (io_stat_io),
+      .armed_i    (armed),
+      .lim_inv_i  (safety[B_S_LIM_INV_LSB+:NAXES]),
+      .lim_i      (lim_i),
+      .probe_i    (probe_i),
+      .idx_armed_i(enc_idx_armed),
+      .latch_o    (io_latch),
+      .stop_o     (io_stop),
+      .ip_idle_i  (~ip_busy & (seg_count == {(FIFO_AW + 1) {1'b0}})),
+      .jog_o      (ip_jog),
+      .jog_neg_o  (ip_jog_neg),
+      .hw_pos_i   (hw_pos[7:0]),
+      .sp_pwm_o   (sp_pwm_o),
+      .sp_en_o    (sp_en_o),
+      .sp_dir_o   (sp_dir_o),
+      .flood_o    (flood_o),
+      .mist_o     (mist_o)
+  );
+
+  // The command's two low bits per axis, for the step generators.
+  wire [NAXES*2-1:0] cmd_lo;
+  genvar g;
+  generate
+    for (g = 0; g < NAXES; g = g + 1) begin : g_cmd
+      assign cmd_lo[g*2+:2] = cmd_live[g*32+:2];
+    end
+  endgenerate
+  mc_step #(
+      .NAXES(NAXES)
+  ) u_step (
+      .clk        (clk),
+      .rst        (rst),
+      .bus_we_i   (bus_we),
+      .bus_addr_i (bus_addr),
+      .bus_wdata_i(bus_wdata),
+      .cmd_i      (cmd_lo),
+      .sync_i     (ip_set[NAXES-1:0]),
+      .allow_i    (armed),
+      .clr_i      (fclr[B_F_FERR_LSB+:NAXES]),
+      .pwm_i      (core_pwm),
+      .dir_i      (core_dir),
+      .enc_a_i    (enc_a_i),
+      .enc_b_i    (enc_b_i),
+      .pwm_o      (pwm_o),
+      .dir_o      (dir_o),
+      .enc_a_o    (enc_a_c),
+      .enc_b_o    (enc_b_c),
+      .stepper_o  (stepper),
+      .err_o      (step_err),
+      .ferr_o     (step_ferr)
+  );
+  // A stepper axis's driver is enabled while the drives are armed.
+  assign drv_en_o = core_en | ({NAXES{armed}} & stepper);
+  reg [31:0] io_stat_w;
+  always @(*) begin
+    io_stat_w = io_stat_io;
+    io_stat_w[B_IOS_STEP_ERR_LSB+:NAXES] = step_err;
+  end
+  assign io_stat = io_stat_w;
 
   // Handwheel: a decoder of its own, position only (the rest is trimmed).
   generate

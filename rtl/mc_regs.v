@@ -128,7 +128,13 @@ module mc_regs #(
     // handwheel decoder
     output reg  [      FILT_W-1:0] hw_filt_o,
     output reg                     hw_dir_inv_o,
-    input  wire [            31:0] hw_pos_i
+    input  wire [            31:0] hw_pos_i,
+    // register write bus of the I/O blocks (mc_io, mc_step): global
+    // registers they decode themselves, written in the executor's apply clock
+    output wire                    bus_we_o,
+    output wire [             4:0] bus_addr_o,
+    output wire [            31:0] bus_wdata_o,
+    input  wire [            31:0] io_stat_i
 );
 
   /* verilator lint_off UNUSEDPARAM */
@@ -240,6 +246,7 @@ module mc_regs #(
         R_IP_SEGS[4:0]: live = {16'd0, ip_seg_cnt_i};
         R_HW_POS[4:0]: live = hw_pos_i;
         R_TLM_HDR[4:0]: live = {fault_i, sample_cnt};
+        R_IO_STAT[4:0]: live = io_stat_i;
         default: live = 32'd0;
       endcase
     end
@@ -415,6 +422,9 @@ module mc_regs #(
   end
   wire w_glb = apply & is_glb;
   wire w_ax = apply & is_ax & ~is_pid;
+  assign bus_we_o    = w_glb;
+  assign bus_addr_o  = addr[4:0];
+  assign bus_wdata_o = data;
   integer ax;
   always @(posedge clk) begin
     arm_set_o        <= 1'b0;

@@ -1,7 +1,10 @@
 // motioncore_icebreaker: the iCEBreaker board top. It holds only what faces
 // the pins: the power-on reset, a two-flop synchronizer on every input that
 // is not an encoder (the decoders synchronize those themselves), and the
-// LEDs' active-low drive. Everything else is mc_board. Pin names are those
+// LEDs' active-low drive. The 24 PMOD pins carry three axes (encoder A/B,
+// limit = home switch, PWM/DIR or STEP/DIR), one enable for every driver,
+// the probe, the spindle (PWM, enable, direction or mist), flood coolant,
+// the handwheel and the e-stop; no encoder index (no pin is left for it). Everything else is mc_board. Pin names are those
 // of constraints/icebreaker.pcf; docs/board.md maps them to PMOD pins.
 //
 // The UART runs at BAUD over the FTDI FT2232H's second channel (the board's
@@ -22,32 +25,32 @@ module motioncore_icebreaker #(
     input  wire BTN_N,
     output wire LEDR_N,
     output wire LEDG_N,
-    // axis X (PMOD 1A): encoder, limit, H-bridge; handwheel A
+    // PMOD 1A: axis X, probe, the drivers' shared enable, handwheel A
     input  wire X_ENC_A,
     input  wire X_ENC_B,
-    input  wire X_ENC_Z,
+    input  wire PROBE,
     input  wire X_LIM,
-    output wire X_PWM,
+    output wire X_PWM,    // STEP on a stepper axis
     output wire X_DIR,
-    output wire X_EN,
+    output wire DRV_EN,
     input  wire HW_A,
-    // axis Y (PMOD 1B); handwheel B
+    // PMOD 1B: axis Y, flood coolant, spindle PWM, handwheel B
     input  wire Y_ENC_A,
     input  wire Y_ENC_B,
-    input  wire Y_ENC_Z,
+    output wire FLOOD,
     input  wire Y_LIM,
     output wire Y_PWM,
     output wire Y_DIR,
-    output wire Y_EN,
+    output wire SP_PWM,
     input  wire HW_B,
-    // axis Z (PMOD 2); e-stop
+    // PMOD 2: axis Z, spindle direction (or mist) and enable, e-stop
     input  wire Z_ENC_A,
     input  wire Z_ENC_B,
-    input  wire Z_ENC_Z,
+    output wire SP_DIR,
     input  wire Z_LIM,
     output wire Z_PWM,
     output wire Z_DIR,
-    output wire Z_EN,
+    output wire SP_EN,
     input  wire ESTOP
 );
 
@@ -68,19 +71,21 @@ module motioncore_icebreaker #(
   wire [2:0] lim_p = {Z_LIM, Y_LIM, X_LIM};
   wire [2:0] enc_a_p = {Z_ENC_A, Y_ENC_A, X_ENC_A};
   wire [2:0] enc_b_p = {Z_ENC_B, Y_ENC_B, X_ENC_B};
-  wire [2:0] enc_z_p = {Z_ENC_Z, Y_ENC_Z, X_ENC_Z};
   /* verilator lint_on UNUSEDSIGNAL */
 
-  // Two-flop synchronizers: {RX, button, e-stop, limits}. RX idles high.
-  localparam integer NS = 3 + NAXES;
+  // Two-flop synchronizers: {RX, probe, button, e-stop, limits}. RX idles high.
+  localparam integer NS = 4 + NAXES;
   reg [NS-1:0] s1, s2;
   always @(posedge clk_w) begin
-    s1 <= {RX, ~BTN_N, ESTOP, lim_p[NAXES-1:0]};
+    s1 <= {RX, PROBE, ~BTN_N, ESTOP, lim_p[NAXES-1:0]};
     s2 <= s1;
   end
 
   wire [NAXES-1:0] pwm, dir, en;
   wire led_ok, led_fault;
+  /* verilator lint_off UNUSEDSIGNAL */
+  wire mist;
+  /* verilator lint_on UNUSEDSIGNAL */
   mc_board #(
       .NAXES (NAXES),
       .CLK_HZ(CLK_HZ),
@@ -93,15 +98,21 @@ module motioncore_icebreaker #(
       .tx_o       (TX),
       .enc_a_i    (enc_a_p[NAXES-1:0]),
       .enc_b_i    (enc_b_p[NAXES-1:0]),
-      .enc_z_i    (enc_z_p[NAXES-1:0]),
+      .enc_z_i    ({NAXES{1'b0}}),
       .hw_a_i     (HW_A),
       .hw_b_i     (HW_B),
       .lim_i      (s2[NAXES-1:0]),
       .estop_i    (s2[NAXES]),
       .stop_i     (s2[NAXES+1]),
+      .probe_i    (s2[NAXES+2]),
       .pwm_o      (pwm),
       .dir_o      (dir),
       .drv_en_o   (en),
+      .sp_pwm_o   (SP_PWM),
+      .sp_en_o    (SP_EN),
+      .sp_dir_o   (SP_DIR),
+      .flood_o    (FLOOD),
+      .mist_o     (mist),  // no pin: IO_CTRL.mist_on_dir puts it on SP_DIR
       .led_ok_o   (led_ok),
       .led_fault_o(led_fault)
   );
@@ -109,11 +120,10 @@ module motioncore_icebreaker #(
   /* verilator lint_off UNUSEDSIGNAL */
   wire [NAXES+2:0] pwm_p = {3'b000, pwm};
   wire [NAXES+2:0] dir_p = {3'b000, dir};
-  wire [NAXES+2:0] en_p = {3'b000, en};
   /* verilator lint_on UNUSEDSIGNAL */
   assign {Z_PWM, Y_PWM, X_PWM} = pwm_p[2:0];
   assign {Z_DIR, Y_DIR, X_DIR} = dir_p[2:0];
-  assign {Z_EN, Y_EN, X_EN}    = en_p[2:0];
+  assign DRV_EN = |en;
   assign LEDG_N = ~led_ok;
   assign LEDR_N = ~led_fault;
 

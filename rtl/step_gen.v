@@ -23,9 +23,6 @@
 // - Pin polarity is applied at the top, not here.
 `default_nettype none
 
-// Not instantiated by the board yet (issue 17 wires it to the stepper axes'
-// pins): until then it is a second top when rtl/ is linted as a whole.
-/* verilator lint_off MULTITOP */
 module step_gen #(
     parameter integer PW_W = 8,  // width of the pulse and setup times, clocks
     parameter integer BL_W = 4   // width of the signed step backlog
@@ -219,6 +216,5 @@ module step_gen #(
 `endif
 
 endmodule
-/* verilator lint_on MULTITOP */
 
 `default_nettype wire

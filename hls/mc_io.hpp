@@ -1,0 +1,230 @@
+// mc_io twin: the board's machine I/O, clock by clock: probe and home-switch
+// filters and latch strobes, spindle PWM and coolant, the handwheel jog.
+// Mirrors rtl/mc_io.v, which documents the behaviour; the members are the
+// RTL's registers, same names, and clock() is one edge.
+//
+// Synthesizable subset: fixed-width integers, no heap, static loop bounds.
+#pragma once
+
+#include <cstdint>
+
+#include "board_regs.hpp"
+
+namespace mc {
+
+// Inputs of one clock: the RTL's ports without clk and the _i suffix.
+struct McIoIn {
+  bool rst = false;
+  bool bus_we = false;
+  uint8_t bus_addr = 0;  // 5 bits
+  uint32_t bus_wdata = 0;
+  bool armed = false;
+  uint8_t lim_inv = 0;  // bit per axis
+  uint8_t lim = 0;      // bit per axis, synchronized
+  bool probe = false;   // synchronized
+  uint8_t idx_armed = 0;
+  bool ip_idle = false;
+  uint8_t hw_pos = 0;  // the handwheel count's low bits
+};
+
+template <int NAXES = 3>
+class McIo {
+  static_assert(NAXES >= 1 && NAXES <= 3, "mc_io: NAXES must be 1..3");
+
+ public:
+  static constexpr int NS = NAXES + 1;  // filtered inputs: home switches, then the probe
+  static constexpr uint8_t AXES = (1u << NAXES) - 1;
+
+  // The RTL's registers.
+  struct R {
+    // from the bus
+    bool sp_on = false, sp_rev = false, flood = false, mist = false, mist_on_dir = false;
+    uint16_t duty = 0;  // 10 bits
+    uint8_t lsrc = 0;   // 6 bits
+    bool probe_inv = false, lstop = false;
+    uint8_t lfilt = 0;  // 4 bits
+    bool m_on = false, m_det1 = false;
+    uint8_t m_axis = 0, m_step = 0;
+    uint16_t m_rate = 0, m_inc = 0;
+    // switch filters
+    uint8_t sw = 0;          // NS bits
+    uint8_t sw_cnt[4] = {};  // 4 bits each
+    // latches, spindle, jog
+    uint8_t latch_o = 0;
+    bool stop_o = false;
+    uint16_t pcnt = 0;  // 10 bits
+    bool sp_pwm_o = false, sp_en_o = false, sp_dir_o = false, flood_o = false, mist_o = false;
+    uint8_t ref_pos = 0;
+    uint16_t pend = 0;  // signed
+    uint16_t tmr = 0;
+    uint8_t jog_o = 0;
+    bool jog_neg_o = false;
+  };
+  R r;
+
+  uint32_t stat_o() const {
+    namespace bb = board::bits;
+    return uint32_t(r.sw >> NAXES & 1) << bb::IOS_PROBE | uint32_t(r.sw & AXES) << bb::IOS_HOME_LSB |
+           uint32_t(r.pend) << bb::IOS_MPG_PEND_LSB;
+  }
+
+  void clock(const McIoIn& in) {
+    namespace br = board::reg;
+    namespace bb = board::bits;
+    // Nonblocking: every right-hand side reads o, this clock's registers.
+    const R o = r;
+    R& n = r;
+
+    // Switch filters and latch strobes.
+    const uint8_t swin = sw_in(o, in);
+    const uint32_t flen = o.lfilt == 0 ? 1 : o.lfilt;
+    uint8_t rise = 0;
+    for (int i = 0; i < NS; ++i) {
+      const bool v = swin >> i & 1, s = o.sw >> i & 1;
+      const bool pass = o.sw_cnt[i] + 1u >= flen;
+      if (v && !s && pass) rise = uint8_t(rise | 1u << i);
+      if (in.rst) {
+        n.sw = uint8_t((n.sw & ~(1u << i)) | uint32_t(v) << i);
+        n.sw_cnt[i] = 0;
+      } else if (v == s) {
+        n.sw_cnt[i] = 0;
+      } else if (pass) {
+        n.sw = uint8_t(n.sw ^ (1u << i));
+        n.sw_cnt[i] = 0;
+      } else {
+        n.sw_cnt[i] = uint8_t(o.sw_cnt[i] + 1);
+      }
+    }
+    uint8_t lat = 0;
+    for (int i = 0; i < NAXES; ++i) {
+      const uint32_t src = o.lsrc >> (2 * i) & 3;
+      if ((src == bb::L_SRC_HOME && (rise >> i & 1)) || (src == bb::L_SRC_PROBE && (rise >> NAXES & 1)))
+        lat = uint8_t(lat | 1u << i);
+    }
+    n.latch_o = in.rst ? 0 : lat;
+    n.stop_o = !in.rst && o.lstop && (lat & in.idx_armed) != 0;
+
+    // Spindle and coolant.
+    if (in.rst) {
+      n.pcnt = 0;
+      n.sp_pwm_o = n.sp_en_o = n.sp_dir_o = n.flood_o = n.mist_o = false;
+    } else {
+      n.pcnt = (o.pcnt + 1) & 0x3FF;
+      n.sp_pwm_o = in.armed && o.sp_on && (o.duty == 0x3FF || o.pcnt < o.duty);
+      n.sp_en_o = in.armed && o.sp_on;
+      n.sp_dir_o = in.armed && (o.mist_on_dir ? o.mist : o.sp_on && o.sp_rev);
+      n.flood_o = in.armed && o.flood;
+      n.mist_o = in.armed && o.mist;
+    }
+
+    // Handwheel jog.
+    const uint8_t hd = uint8_t(in.hw_pos - o.ref_pos);
+    const uint8_t det = o.m_det1 ? 1 : 4;
+    const bool det_up = !(hd & 0x80) && hd >= det;
+    const bool det_dn = (hd & 0x80) && uint8_t(0 - hd) >= det;
+    const uint16_t inc = o.m_step < 3 ? uint16_t(bb::MPG_STEPS[o.m_step]) : o.m_inc;
+    const int32_t ps = int32_t(int16_t(o.pend)) + (det_dn ? -int32_t(inc) : int32_t(inc));
+    const uint16_t p_det = uint16_t(ps > 32767 ? 32767 : ps < -32767 ? -32767 : ps);
+    const uint16_t rate = o.m_rate < bb::MPG_MIN_RATE ? uint16_t(bb::MPG_MIN_RATE) : o.m_rate;
+    const bool pend_nz = o.pend != 0;
+    const bool go = o.m_on && in.armed && in.ip_idle && pend_nz && o.tmr == 0 && !(det_up || det_dn);
+    const bool neg = o.pend >> 15 & 1;
+    n.jog_o = 0;
+    n.jog_neg_o = neg;
+    if (in.rst || !o.m_on) {
+      n.ref_pos = in.hw_pos;
+      n.pend = 0;
+      n.tmr = 0;
+    } else {
+      if (det_up || det_dn) {
+        n.ref_pos = uint8_t(det_dn ? o.ref_pos - det : o.ref_pos + det);
+        n.pend = p_det;
+      } else if (go) {
+        n.pend = uint16_t(neg ? o.pend + 1 : o.pend - 1);
+      }
+      if (!pend_nz)
+        n.tmr = 0;
+      else if (o.tmr != 0)
+        n.tmr = uint16_t(o.tmr - 1);
+      else if (go)
+        n.tmr = uint16_t(rate - 1);
+      if (go) n.jog_o = uint8_t(1u << o.m_axis & 7);
+    }
+
+    // Registers from the bus.
+    if (in.rst) {
+      n.sp_on = n.sp_rev = n.flood = n.mist = n.mist_on_dir = false;
+      n.duty = 0;
+      n.lsrc = 0;
+      n.probe_inv = n.lstop = false;
+      n.lfilt = 0;
+      n.m_on = n.m_det1 = false;
+      n.m_axis = n.m_step = 0;
+      n.m_rate = n.m_inc = 0;
+    } else if (in.bus_we) {
+      const uint32_t d = in.bus_wdata;
+      switch (in.bus_addr) {
+        case br::IO_CTRL & 0x1F:
+          n.sp_on = d >> bb::IO_SPINDLE & 1;
+          n.sp_rev = d >> bb::IO_SPINDLE_REV & 1;
+          n.flood = d >> bb::IO_FLOOD & 1;
+          n.mist = d >> bb::IO_MIST & 1;
+          n.mist_on_dir = d >> bb::IO_MIST_ON_DIR & 1;
+          n.duty = uint16_t(d >> bb::IO_DUTY_LSB & 0x3FF);
+          break;
+        case br::LATCH & 0x1F:
+          n.lsrc = uint8_t(d >> bb::L_SRC_LSB & 0x3F);
+          n.probe_inv = d >> bb::L_PROBE_INV & 1;
+          n.lstop = d >> bb::L_STOP & 1;
+          n.lfilt = uint8_t(d >> bb::L_FILT_LSB & 0xF);
+          break;
+        case br::MPG & 0x1F:
+          n.m_on = d >> bb::M_ON & 1;
+          n.m_axis = uint8_t(d >> bb::M_AXIS_LSB & 3);
+          n.m_step = uint8_t(d >> bb::M_STEP_LSB & 3);
+          n.m_det1 = d >> bb::M_DETENT1 & 1;
+          n.m_rate = uint16_t(d >> bb::M_RATE_LSB);
+          break;
+        case br::MPG_INC & 0x1F:
+          n.m_inc = uint16_t(d);
+          break;
+        default:
+          break;
+      }
+    }
+  }
+
+  // ---- fast-forward ----------------------------------------------------------
+  // With these inputs held, a clock changes nothing but the spindle's PWM
+  // counter (and its pin): no bus write, the switches settled, no detent,
+  // nothing pending, every other output at the value it is being given.
+  bool quiet(const McIoIn& in) const {
+    if (in.rst || in.bus_we) return false;
+    if (sw_in(r, in) != r.sw) return false;
+    for (int i = 0; i < NS; ++i)
+      if (r.sw_cnt[i] != 0) return false;
+    if (r.latch_o != 0 || r.stop_o || r.jog_o != 0 || r.pend != 0 || r.tmr != 0 || r.jog_neg_o) return false;
+    if (in.hw_pos != r.ref_pos) return false;
+    const bool on = in.armed && r.sp_on;
+    const bool steady_pwm = !on || r.duty == 0 || r.duty == 0x3FF;
+    return r.sp_en_o == on && r.sp_dir_o == (in.armed && (r.mist_on_dir ? r.mist : r.sp_on && r.sp_rev)) &&
+           r.flood_o == (in.armed && r.flood) && r.mist_o == (in.armed && r.mist) &&
+           (!steady_pwm || r.sp_pwm_o == (on && r.duty == 0x3FF));
+  }
+  // n quiet clocks with `armed` held: the PWM counter runs, its pin shows
+  // the last of them.
+  void skip(uint32_t n, bool armed) {
+    if (n == 0) return;
+    const uint32_t last = (r.pcnt + n - 1) & 0x3FF;
+    r.sp_pwm_o = armed && r.sp_on && (r.duty == 0x3FF || last < r.duty);
+    r.pcnt = uint16_t((r.pcnt + n) & 0x3FF);
+  }
+
+ private:
+  // The switches as the filters see them: home switches, then the probe.
+  static uint8_t sw_in(const R& o, const McIoIn& in) {
+    return uint8_t(((in.lim ^ in.lim_inv) & AXES) | uint32_t(in.probe != o.probe_inv) << NAXES);
+  }
+};
+
+}  // namespace mc
