@@ -183,14 +183,14 @@ constexpr int L_SRC_LSB = 0;  // 2 bits per axis
 constexpr uint32_t L_SRC_INDEX = 0, L_SRC_HOME = 1, L_SRC_PROBE = 2, L_SRC_NONE = 3;
 constexpr int L_PROBE_INV = 8;  // the probe input is active low
 constexpr int L_STOP = 9;       // a latch also stops the interpolator and flushes its queue
-constexpr int L_FILT_LSB = 12;  // 4 bits: probe and home-switch filter, clocks
 // MPG: handwheel jog
 constexpr int M_ON = 0;
 constexpr int M_AXIS_LSB = 1;  // 2 bits
 constexpr int M_STEP_LSB = 3;  // 2 bits: counts per detent 1, 10, 100, MPG_INC
 constexpr int M_DETENT1 = 5;   // a detent is one count (else four: one quadrature cycle)
-constexpr int M_RATE_LSB = 16;  // 16 bits: clocks per count moved (below 16: 16)
-constexpr int MPG_MIN_RATE = 16;
+constexpr int M_RATE_LSB = 16;  // 8 bits: 16-clock units per count moved (below 2: 2)
+constexpr int MPG_MIN_RATE = 2;
+constexpr int MPG_INC_BITS = 12;
 constexpr int MPG_STEPS[3] = {1, 10, 100};
 // STEP_CFG: stepper axes
 constexpr int SC_STEPPER_LSB = 0;  // one bit per axis: step/dir on the PWM/DIR pins
@@ -264,11 +264,11 @@ constexpr std::array<RegDef, 38> REGS = {{
      "[25:16] spindle PWM duty of 1023; all off while disarmed"},
     {"LATCH", reg::LATCH, false, Access::RW,
      "[1:0], [3:2], [5:4] what latches axis X, Y, Z (AX_IDX): 0 index, 1 home switch, 2 probe, 3 none; "
-     "[8] probe active low, [9] a latch stops the interpolator, [15:12] switch filter clocks"},
+     "[8] probe active low, [9] a latch stops the interpolator"},
     {"MPG", reg::MPG, false, Access::RW,
      "handwheel jog: [0] on, [2:1] axis, [4:3] counts per detent 1, 10, 100, MPG_INC, [5] one count "
-     "per detent (else 4), [31:16] clocks per count moved (at least 16)"},
-    {"MPG_INC", reg::MPG_INC, false, Access::RW, "[15:0] counts per detent with MPG step 3"},
+     "per detent (else 4), [23:16] 16-clock units per count moved (at least 2)"},
+    {"MPG_INC", reg::MPG_INC, false, Access::RW, "[11:0] counts per detent with MPG step 3"},
     {"STEP_CFG", reg::STEP_CFG, false, Access::RW,
      "[2:0] stepper axes, [6:4] closed loop (POS from the encoder), [13:8] step pulse clocks, "
      "[21:16] direction setup clocks, [26:24] step active low, [30:28] direction reversed"},

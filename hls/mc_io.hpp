@@ -42,13 +42,13 @@ class McIo {
     uint16_t duty = 0;  // 10 bits
     uint8_t lsrc = 0;   // 6 bits
     bool probe_inv = false, lstop = false;
-    uint8_t lfilt = 0;  // 4 bits
     bool m_on = false, m_det1 = false;
     uint8_t m_axis = 0, m_step = 0;
-    uint16_t m_rate = 0, m_inc = 0;
+    uint8_t m_rate = 0;
+    uint16_t m_inc = 0;  // 12 bits
     // switch filters
     uint8_t sw = 0;          // NS bits
-    uint8_t sw_cnt[4] = {};  // 4 bits each
+    uint8_t sw_cnt[4] = {};  // 2 bits each
     // latches, spindle, jog
     uint8_t latch_o = 0;
     bool stop_o = false;
@@ -56,7 +56,7 @@ class McIo {
     bool sp_pwm_o = false, sp_en_o = false, sp_dir_o = false, flood_o = false, mist_o = false;
     uint8_t ref_pos = 0;
     uint16_t pend = 0;  // signed
-    uint16_t tmr = 0;
+    uint8_t tmr = 0;    // 16-clock units
     uint8_t jog_o = 0;
     bool jog_neg_o = false;
   };
@@ -77,22 +77,21 @@ class McIo {
 
     // Switch filters and latch strobes.
     const uint8_t swin = sw_in(o, in);
-    const uint32_t flen = o.lfilt == 0 ? 1 : o.lfilt;
+    R reset_regs;  // the registers' reset values (probe_inv for the reset's levels)
+    const uint8_t swrst = sw_in(reset_regs, in);
     uint8_t rise = 0;
     for (int i = 0; i < NS; ++i) {
       const bool v = swin >> i & 1, s = o.sw >> i & 1;
-      const bool pass = o.sw_cnt[i] + 1u >= flen;
+      const bool pass = o.sw_cnt[i] == 3;  // the new level's fourth clock
       if (v && !s && pass) rise = uint8_t(rise | 1u << i);
       if (in.rst) {
-        n.sw = uint8_t((n.sw & ~(1u << i)) | uint32_t(v) << i);
+        n.sw = uint8_t((n.sw & ~(1u << i)) | (swrst & (1u << i)));
         n.sw_cnt[i] = 0;
       } else if (v == s) {
         n.sw_cnt[i] = 0;
-      } else if (pass) {
-        n.sw = uint8_t(n.sw ^ (1u << i));
-        n.sw_cnt[i] = 0;
       } else {
-        n.sw_cnt[i] = uint8_t(o.sw_cnt[i] + 1);
+        if (pass) n.sw = uint8_t(n.sw ^ (1u << i));
+        n.sw_cnt[i] = uint8_t((o.sw_cnt[i] + 1) & 3);
       }
     }
     uint8_t lat = 0;
@@ -123,31 +122,25 @@ class McIo {
     const bool det_up = !(hd & 0x80) && hd >= det;
     const bool det_dn = (hd & 0x80) && uint8_t(0 - hd) >= det;
     const uint16_t inc = o.m_step < 3 ? uint16_t(bb::MPG_STEPS[o.m_step]) : o.m_inc;
-    const int32_t ps = int32_t(int16_t(o.pend)) + (det_dn ? -int32_t(inc) : int32_t(inc));
-    const uint16_t p_det = uint16_t(ps > 32767 ? 32767 : ps < -32767 ? -32767 : ps);
-    const uint16_t rate = o.m_rate < bb::MPG_MIN_RATE ? uint16_t(bb::MPG_MIN_RATE) : o.m_rate;
+    const bool neg = o.pend >> 15 & 1;
+    const bool room = neg == (o.pend >> 14 & 1) || det_dn != neg;
     const bool pend_nz = o.pend != 0;
     const bool go = o.m_on && in.armed && in.ip_idle && pend_nz && o.tmr == 0 && !(det_up || det_dn);
-    const bool neg = o.pend >> 15 & 1;
+    const uint16_t step = (det_up || det_dn) ? uint16_t(det_dn ? 0u - inc : inc) : uint16_t(neg ? 1 : 0xFFFF);
+    const uint16_t p_next = uint16_t(o.pend + step);
     n.jog_o = 0;
-    n.jog_neg_o = neg;
+    n.jog_neg_o = !in.rst && neg;
     if (in.rst || !o.m_on) {
       n.ref_pos = in.hw_pos;
       n.pend = 0;
       n.tmr = 0;
     } else {
-      if (det_up || det_dn) {
-        n.ref_pos = uint8_t(det_dn ? o.ref_pos - det : o.ref_pos + det);
-        n.pend = p_det;
-      } else if (go) {
-        n.pend = uint16_t(neg ? o.pend + 1 : o.pend - 1);
-      }
-      if (!pend_nz)
-        n.tmr = 0;
-      else if (o.tmr != 0)
-        n.tmr = uint16_t(o.tmr - 1);
-      else if (go)
-        n.tmr = uint16_t(rate - 1);
+      if (det_up || det_dn) n.ref_pos = uint8_t(det_dn ? o.ref_pos - det : o.ref_pos + det);
+      if (((det_up || det_dn) && room) || go) n.pend = p_next;
+      if (go)
+        n.tmr = o.m_rate < bb::MPG_MIN_RATE ? uint8_t(bb::MPG_MIN_RATE) : o.m_rate;
+      else if (o.tmr != 0 && (o.pcnt & 15) == 15)
+        n.tmr = uint8_t(o.tmr - 1);
       if (go) n.jog_o = uint8_t(1u << o.m_axis & 7);
     }
 
@@ -157,10 +150,10 @@ class McIo {
       n.duty = 0;
       n.lsrc = 0;
       n.probe_inv = n.lstop = false;
-      n.lfilt = 0;
       n.m_on = n.m_det1 = false;
       n.m_axis = n.m_step = 0;
-      n.m_rate = n.m_inc = 0;
+      n.m_rate = 0;
+      n.m_inc = 0;
     } else if (in.bus_we) {
       const uint32_t d = in.bus_wdata;
       switch (in.bus_addr) {
@@ -176,17 +169,16 @@ class McIo {
           n.lsrc = uint8_t(d >> bb::L_SRC_LSB & 0x3F);
           n.probe_inv = d >> bb::L_PROBE_INV & 1;
           n.lstop = d >> bb::L_STOP & 1;
-          n.lfilt = uint8_t(d >> bb::L_FILT_LSB & 0xF);
           break;
         case br::MPG & 0x1F:
           n.m_on = d >> bb::M_ON & 1;
           n.m_axis = uint8_t(d >> bb::M_AXIS_LSB & 3);
           n.m_step = uint8_t(d >> bb::M_STEP_LSB & 3);
           n.m_det1 = d >> bb::M_DETENT1 & 1;
-          n.m_rate = uint16_t(d >> bb::M_RATE_LSB);
+          n.m_rate = uint8_t(d >> bb::M_RATE_LSB);
           break;
         case br::MPG_INC & 0x1F:
-          n.m_inc = uint16_t(d);
+          n.m_inc = uint16_t(d & ((1u << bb::MPG_INC_BITS) - 1));
           break;
         default:
           break;

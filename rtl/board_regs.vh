@@ -125,7 +125,6 @@ localparam integer B_IO_DUTY_LSB = 16;
 localparam integer B_L_SRC_LSB = 0;
 localparam integer B_L_PROBE_INV = 8;
 localparam integer B_L_STOP = 9;
-localparam integer B_L_FILT_LSB = 12;
 localparam integer B_M_ON = 0;
 localparam integer B_M_AXIS_LSB = 1;
 localparam integer B_M_STEP_LSB = 3;

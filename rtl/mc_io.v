@@ -9,7 +9,7 @@
 // - The probe (probe_i, synchronized, LATCH.probe_inv applied) and each
 //   home switch (the axis's limit input, SAFETY's polarity applied, whether
 //   or not the limit is enabled) pass a glitch filter: a new level counts
-//   once the input has shown it on max(LATCH.filt, 1) consecutive clocks.
+//   once the input has shown it on 4 consecutive clocks.
 // - latch_o[a] pulses in the clock the filtered input that LATCH selects for
 //   axis a (its home switch, or the probe) becomes active. The decoders take
 //   it as an index edge: every armed axis latches its position in that one
@@ -23,10 +23,12 @@
 //   for boards with one pin for both.
 // - Handwheel jog (MPG.on): every detent of the handwheel (hw_pos_i: four
 //   counts, or one with MPG.detent1) adds the selected increment to a
-//   pending count (signed, saturating at +-32767). While the drives are
-//   armed and the interpolator is idle with its queue empty, jog_o moves the
-//   selected axis's command one count towards it every MPG.rate clocks
-//   (at least 16), under the same following-error and limit checks as any
+//   pending count (signed; a detent that would take it further beyond
+//   16383 is dropped, so it never wraps). While the drives are armed and the
+//   interpolator is idle with its queue empty, jog_o moves the selected
+//   axis's command one count at a time towards nothing pending, the counts
+//   16 * (MPG.rate - 1) + 1 to 16 * MPG.rate clocks apart (MPG.rate below 2
+//   acts as 2), under the same following-error and limit checks as any
 //   motion. Turning MPG off drops what is pending.
 `default_nettype none
 
@@ -78,10 +80,10 @@ module mc_io #(
   reg  [ 9:0] duty;
   reg  [ 5:0] lsrc;
   reg         probe_inv, lstop;
-  reg  [ 3:0] lfilt;
   reg         m_on, m_det1;
   reg  [ 1:0] m_axis, m_step;
-  reg  [15:0] m_rate, m_inc;
+  reg  [ 7:0] m_rate;
+  reg  [11:0] m_inc;
   always @(posedge clk) begin
     if (rst) begin
       {sp_on, sp_rev, flood, mist, mist_on_dir} <= 5'd0;
@@ -89,13 +91,12 @@ module mc_io #(
       lsrc      <= 6'd0;
       probe_inv <= 1'b0;
       lstop     <= 1'b0;
-      lfilt     <= 4'd0;
       m_on      <= 1'b0;
       m_det1    <= 1'b0;
       m_axis    <= 2'd0;
       m_step    <= 2'd0;
-      m_rate    <= 16'd0;
-      m_inc     <= 16'd0;
+      m_rate    <= 8'd0;
+      m_inc     <= 12'd0;
     end else if (bus_we_i) begin
       case (bus_addr_i)
         R_IO_CTRL[4:0]: begin
@@ -110,45 +111,43 @@ module mc_io #(
           lsrc      <= bus_wdata_i[B_L_SRC_LSB+:6];
           probe_inv <= bus_wdata_i[B_L_PROBE_INV];
           lstop     <= bus_wdata_i[B_L_STOP];
-          lfilt     <= bus_wdata_i[B_L_FILT_LSB+:4];
         end
         R_MPG[4:0]: begin
           m_on   <= bus_wdata_i[B_M_ON];
           m_axis <= bus_wdata_i[B_M_AXIS_LSB+:2];
           m_step <= bus_wdata_i[B_M_STEP_LSB+:2];
           m_det1 <= bus_wdata_i[B_M_DETENT1];
-          m_rate <= bus_wdata_i[B_M_RATE_LSB+:16];
+          m_rate <= bus_wdata_i[B_M_RATE_LSB+:8];
         end
-        R_MPG_INC[4:0]: m_inc <= bus_wdata_i[15:0];
+        R_MPG_INC[4:0]: m_inc <= bus_wdata_i[11:0];
         default: ;
       endcase
     end
   end
 
   // ---------------------------------------------------------------------
-  // Switch filters: the probe (input NAXES) and the home switches.
+  // Switch filters: the home switches, then the probe. sw_cnt: clocks the
+  // input has differed from its level, minus one.
   localparam integer NS = NAXES + 1;
   wire [NS-1:0] sw_in = {probe_i ^ probe_inv, lim_i ^ lim_inv_i};
+  wire [NS-1:0] sw_rst = {probe_i, lim_i ^ lim_inv_i};  // with probe_inv's reset value
   reg  [NS-1:0] sw;  // filtered levels
-  reg  [NS*4-1:0] sw_cnt;  // clocks the input has differed from its level, minus one
-  wire [3:0] flen = lfilt == 4'd0 ? 4'd1 : lfilt;
+  reg  [NS*2-1:0] sw_cnt;
   reg  [NS-1:0] sw_rise;  // the filtered level becomes 1 at this clock's edge
   integer i;
   always @(*) begin
-    for (i = 0; i < NS; i = i + 1) sw_rise[i] = sw_in[i] && !sw[i] && sw_cnt[i*4+:4] + 4'd1 >= flen;
+    for (i = 0; i < NS; i = i + 1) sw_rise[i] = sw_in[i] && !sw[i] && &sw_cnt[i*2+:2];
   end
   always @(posedge clk) begin
     for (i = 0; i < NS; i = i + 1) begin
       if (rst) begin
-        sw[i] <= sw_in[i];  // adopt the present levels: leaving reset latches nothing
-        sw_cnt[i*4+:4] <= 4'd0;
+        sw[i] <= sw_rst[i];  // adopt the present levels: leaving reset latches nothing
+        sw_cnt[i*2+:2] <= 2'd0;
       end else if (sw_in[i] == sw[i]) begin
-        sw_cnt[i*4+:4] <= 4'd0;
-      end else if (sw_cnt[i*4+:4] + 4'd1 >= flen) begin
-        sw[i] <= sw_in[i];
-        sw_cnt[i*4+:4] <= 4'd0;
+        sw_cnt[i*2+:2] <= 2'd0;
       end else begin
-        sw_cnt[i*4+:4] <= sw_cnt[i*4+:4] + 4'd1;
+        if (&sw_cnt[i*2+:2]) sw[i] <= sw_in[i];
+        sw_cnt[i*2+:2] <= sw_cnt[i*2+:2] + 2'd1;  // 3 wraps to 0 as the level flips
       end
     end
   end
@@ -197,47 +196,42 @@ module mc_io #(
 
   // ---------------------------------------------------------------------
   // Handwheel jog. ref: the handwheel count of the last detent (low bits).
+  // One adder serves a detent (+-inc) and a count moved (towards zero).
   reg  [ 7:0] ref_pos;
   reg  [15:0] pend;  // signed
-  reg  [15:0] tmr;
+  reg  [ 7:0] tmr;  // in units of 16 clocks (pcnt's low bits)
   wire [ 7:0] hd = hw_pos_i - ref_pos;
   wire [ 7:0] det = m_det1 ? 8'd1 : 8'd4;
-  wire        det_up = !hd[7] && hd >= det;
-  wire        det_dn = hd[7] && (8'd0 - hd) >= det;
-  reg  [15:0] inc;
+  // hd >= det and -hd >= det, for det 1 or 4, without the comparators.
+  wire        det_up = !hd[7] && (m_det1 ? |hd[6:0] : |hd[6:2]);
+  wire        det_dn = hd[7] && (m_det1 || !(&hd[6:2] && |hd[1:0]));  // hd <= -4: not FD..FF
+  // A detent is taken while |pend| is below 16384, or when it lowers it.
+  wire        room = pend[15] == pend[14] || (det_dn ^ pend[15]);
+  reg  [11:0] inc;
   always @(*) begin
     case (m_step)
-      2'd0: inc = 16'd1;
-      2'd1: inc = 16'd10;
-      2'd2: inc = 16'd100;
+      2'd0: inc = 12'd1;
+      2'd1: inc = 12'd10;
+      2'd2: inc = 12'd100;
       default: inc = m_inc;
     endcase
   end
-  // pend +- inc, saturating at +-32767.
-  wire [17:0] p_ext = {{2{pend[15]}}, pend};
-  wire [17:0] p_sum = det_dn ? p_ext - {2'b00, inc} : p_ext + {2'b00, inc};
-  wire [15:0] p_det = ($signed(p_sum) > 18'sd32767) ? 16'h7FFF :
-                      ($signed(p_sum) < -18'sd32767) ? 16'h8001 : p_sum[15:0];
-  wire [15:0] rate = m_rate < 16'd16 ? 16'd16 : m_rate;
   wire        pend_nz = pend != 16'd0;
-  wire        go = m_on && armed_i && ip_idle_i && pend_nz && tmr == 16'd0 && !(det_up || det_dn);
+  wire        go = m_on && armed_i && ip_idle_i && pend_nz && tmr == 8'd0 && !(det_up || det_dn);
+  wire [15:0] step = (det_up || det_dn) ? (det_dn ? -{4'd0, inc} : {4'd0, inc}) : (pend[15] ? 16'd1 : 16'hFFFF);
+  wire [15:0] p_next = pend + step;
   always @(posedge clk) begin
     jog_o     <= 3'd0;
-    jog_neg_o <= pend[15];
+    jog_neg_o <= !rst && pend[15];
     if (rst || !m_on) begin
       ref_pos <= hw_pos_i;
       pend    <= 16'd0;
-      tmr     <= 16'd0;
+      tmr     <= 8'd0;
     end else begin
-      if (det_up || det_dn) begin
-        ref_pos <= det_dn ? ref_pos - det : ref_pos + det;
-        pend    <= p_det;
-      end else if (go) begin
-        pend <= pend[15] ? pend + 16'd1 : pend - 16'd1;
-      end
-      if (!pend_nz) tmr <= 16'd0;
-      else if (tmr != 16'd0) tmr <= tmr - 16'd1;
-      else if (go) tmr <= rate - 16'd1;
+      if (det_up || det_dn) ref_pos <= det_dn ? ref_pos - det : ref_pos + det;
+      if (((det_up || det_dn) && room) || go) pend <= p_next;
+      if (go) tmr <= m_rate < 8'd2 ? 8'd2 : m_rate;
+      else if (tmr != 8'd0 && &pcnt[3:0]) tmr <= tmr - 8'd1;
       if (go) jog_o <= 3'd1 << m_axis;
     end
   end

@@ -100,3 +100,7 @@ mc_gtest(test_step_gen unit test_step_gen.cpp)
 target_link_libraries(test_step_gen PRIVATE mc_hls)
 mc_gtest(test_step_gen_rtl rtl test_step_gen_rtl.cpp)
 target_link_libraries(test_step_gen_rtl PRIVATE mc_hls vstep_gen vstep_gen_small)
+# The board's machine I/O (probe and home latches, spindle, handwheel jog).
+mc_verilate(vmc_io TOP mc_io SOURCES ${MC_RTL_DIR}/mc_io.v)
+mc_gtest(test_mc_io_rtl rtl test_mc_io_rtl.cpp)
+target_link_libraries(test_mc_io_rtl PRIVATE mc_hls vmc_io)
