@@ -14,6 +14,7 @@ namespace mc {
 
 // Inputs of one clock: the RTL's ports without clk and the _i suffix.
 struct McIoIn {
+  bool operator==(const McIoIn&) const = default;
   bool rst = false;
   bool bus_we = false;
   uint8_t bus_addr = 0;  // 5 bits
@@ -35,8 +36,11 @@ class McIo {
   static constexpr int NS = NAXES + 1;  // filtered inputs: home switches, then the probe
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
 
+  bool operator==(const McIo&) const = default;
+
   // The RTL's registers.
   struct R {
+    bool operator==(const R&) const = default;
     // from the bus
     bool sp_on = false, sp_rev = false, flood = false, mist = false, mist_on_dir = false;
     uint16_t duty = 0;  // 10 bits
