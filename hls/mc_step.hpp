@@ -36,13 +36,16 @@ struct McStepOut {
   bool operator==(const McStepOut&) const = default;
 };
 
-template <int NAXES = 3>
+// STEPPERS: the axes built with a step generator, bit a for axis a (the
+// RTL's parameter); the others keep the H-bridge's pins and ignore STEP_CFG.
+template <int NAXES = 3, int STEPPERS = 7>
 class McStep {
   static_assert(NAXES >= 1 && NAXES <= 3, "mc_step: NAXES must be 1..3");
 
  public:
   using Gen = StepGen<6, 4>;
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
+  static constexpr uint8_t BUILT = uint8_t(STEPPERS & AXES);
 
   // The RTL's registers.
   uint8_t stepper = 0, closed = 0, step_inv = 0, dir_rev = 0;  // bit per axis
@@ -78,6 +81,7 @@ class McStep {
     namespace bb = board::bits;
     // The generators' inputs take this clock's STEP_CFG (registers).
     for (int a = 0; a < NAXES; ++a) {
+      if (!(BUILT >> a & 1)) continue;  // not built: the generator stays as reset left it
       const bool step = u_gen[a].step_o, sdir = u_gen[a].dir_o, err = u_gen[a].err_o;
       StepGenIn g;
       g.rst = in.rst;
@@ -103,7 +107,7 @@ class McStep {
       pw = setup = 0;
     } else if (in.bus_we && in.bus_addr == (board::reg::STEP_CFG & 0x1F)) {
       const uint32_t d = in.bus_wdata;
-      stepper = uint8_t(d >> bb::SC_STEPPER_LSB & AXES);
+      stepper = uint8_t(d >> bb::SC_STEPPER_LSB & BUILT);
       closed = uint8_t(d >> bb::SC_CLOSED_LSB & AXES);
       pw = uint8_t(d >> bb::SC_PW_LSB & 0x3F);
       setup = uint8_t(d >> bb::SC_SETUP_LSB & 0x3F);

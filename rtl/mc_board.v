@@ -20,7 +20,8 @@ module mc_board #(
     parameter integer FILT_W   = 4,           // encoder filter length bits: up to 15 clocks (1.25 us)
     parameter integer CLK_HZ   = 12_000_000,  // clock, Hz
     parameter integer BAUD     = 1_000_000,   // UART rate, bit/s
-    parameter integer HANDWHEEL = 1           // 1: build the handwheel decoder, 0: HW_POS reads 0
+    parameter integer HANDWHEEL = 1,          // 1: build the handwheel decoder, 0: HW_POS reads 0
+    parameter integer STEPPERS  = 0           // axes that can be steppers (bit a: axis a; mc_step)
 ) (
     // clock and reset
     input  wire             clk,
@@ -395,7 +396,8 @@ module mc_board #(
     end
   endgenerate
   mc_step #(
-      .NAXES(NAXES)
+      .NAXES   (NAXES),
+      .STEPPERS(STEPPERS)
   ) u_step (
       .clk        (clk),
       .rst        (rst),

@@ -15,7 +15,8 @@ module motioncore_icebreaker #(
     parameter integer NAXES  = 3,           // axes built (1..3): X, then Y, then Z
     parameter integer CLK_HZ = 12_000_000,  // the board oscillator, Hz
     parameter integer BAUD   = 1_000_000,   // host link, bit/s
-    parameter integer HANDWHEEL = 1         // build the handwheel decoder
+    parameter integer HANDWHEEL = 1,        // build the handwheel decoder
+    parameter integer STEPPERS  = 0         // axes built with a step generator (bit a: axis a)
 ) (
     // clock: 12 MHz oscillator
     input  wire CLK,
@@ -90,7 +91,8 @@ module motioncore_icebreaker #(
       .NAXES (NAXES),
       .CLK_HZ(CLK_HZ),
       .BAUD  (BAUD),
-      .HANDWHEEL(HANDWHEEL)
+      .HANDWHEEL(HANDWHEEL),
+      .STEPPERS (STEPPERS)
   ) u_board (
       .clk        (clk_w),
       .rst        (rst),

@@ -106,5 +106,7 @@ mc_gtest(test_mc_io_rtl rtl test_mc_io_rtl.cpp)
 target_link_libraries(test_mc_io_rtl PRIVATE mc_hls vmc_io)
 # The board's stepper axes (step_gen per axis, the steps' quadrature copy).
 mc_verilate(vmc_step TOP mc_step SOURCES ${MC_RTL_DIR}/mc_step.v ${MC_RTL_DIR}/step_gen.v)
+mc_verilate(vmc_step5 TOP mc_step PREFIX Vmc_step5 PARAMS -GSTEPPERS=5
+  SOURCES ${MC_RTL_DIR}/mc_step.v ${MC_RTL_DIR}/step_gen.v)
 mc_gtest(test_mc_step_rtl rtl test_mc_step_rtl.cpp)
-target_link_libraries(test_mc_step_rtl PRIVATE mc_hls vmc_step)
+target_link_libraries(test_mc_step_rtl PRIVATE mc_hls vmc_step vmc_step5)
