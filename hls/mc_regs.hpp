@@ -49,6 +49,8 @@ struct McRegsIn {
   uint8_t pid_en = 0;
   // handwheel
   uint32_t hw_pos = 0;
+  // the I/O blocks' live status (mc_io, mc_step)
+  uint32_t io_stat = 0;
 };
 
 template <int NAXES = 3, int FIFO_AW = 9, int FILT_W = 8, int CLK_HZ = 12'000'000, int BAUD = 1'000'000>
@@ -165,6 +167,9 @@ class McRegs {
   uint16_t drv_ovr_val_o() const { return uint16_t(r.data); }
   uint8_t ip_set_o() const { return (r.set_t2 & 4) ? uint8_t(1u << (r.set_t2 & 3) & 7) : uint8_t(0); }
   uint32_t ip_set_val_o() const { return r.sq; }
+  // The I/O blocks' write bus: a global register write, in the apply clock.
+  bool bus_we_o() const { return r.xs == X_APPLY && is_glb_a(r.addr); }
+  uint8_t bus_addr_o() const { return uint8_t(r.addr & 0x1F); }
   uint8_t smp_raddr_o() const { return uint8_t((r.ra >> 4 & 3) << 3 | ra_fld(r.ra)); }
   bool tx_we_o() const { return w_wr() || x_wr(); }
   uint8_t tx_waddr_o() const { return w_wr() ? r.w_ptr : 0; }
@@ -757,6 +762,8 @@ class McRegs {
         return in.hw_pos;
       case br::TLM_HDR & 0x1F:
         return uint32_t(in.fault) << 16 | r.sample_cnt;
+      case br::IO_STAT & 0x1F:
+        return in.io_stat;
       default:
         return 0;
     }
