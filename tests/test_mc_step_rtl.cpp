@@ -93,8 +93,9 @@ void random_run(uint32_t seed) {
       loop_edges += ((o.enc_a ^ last_a) & loop) != 0;
       last_a = o.enc_a;
     }
-    std::printf("STEPPERS %d, seed %u: %ld step-high clocks, %ld following-error strobes, %ld loopback A edges\n", STEPPERS, seed,
-                steps, ferrs, loop_edges);
+    std::printf(
+        "STEPPERS %d, seed %u: %ld step-high clocks, %ld following-error strobes, %ld loopback A edges\n",
+        STEPPERS, seed, steps, ferrs, loop_edges);
     EXPECT_GT(steps, 10000);
     EXPECT_GT(ferrs, 10);
     EXPECT_GT(loop_edges, 1000);
