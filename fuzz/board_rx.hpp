@@ -39,16 +39,17 @@ namespace br = board::reg;
 namespace hp = host::proto;
 
 // The board top's inputs at rest: reset released, UART idle, no limit, no
-// e-stop, every encoder and the handwheel still. Evaluated once.
+// probe, no e-stop, every encoder and the handwheel still. Evaluated once.
 inline void inputs_at_rest(Vmotioncore_icebreaker& top) {
   top.CLK = 0;
   top.RX = 1;
   top.BTN_N = 1;
   top.ESTOP = 0;
+  top.PROBE = 0;
   top.X_LIM = top.Y_LIM = top.Z_LIM = 0;
-  top.X_ENC_A = top.X_ENC_B = top.X_ENC_Z = 0;
-  top.Y_ENC_A = top.Y_ENC_B = top.Y_ENC_Z = 0;
-  top.Z_ENC_A = top.Z_ENC_B = top.Z_ENC_Z = 0;
+  top.X_ENC_A = top.X_ENC_B = 0;
+  top.Y_ENC_A = top.Y_ENC_B = 0;
+  top.Z_ENC_A = top.Z_ENC_B = 0;
   top.HW_A = top.HW_B = 0;
   top.eval();
 }

@@ -1,8 +1,8 @@
 // mc_board twin: the portable board core, clock by clock: motion_core plus
 // the link (uart_rx, uart_tx, link_rx, link_tx), the register file
-// (mc_regs), the safety logic (mc_safety), the handwheel decoder and the
-// LEDs. Mirrors rtl/mc_board.v, which documents how to use it; the pins
-// reach it through the board top (hls/motioncore_icebreaker.hpp).
+// (mc_regs), the safety logic (mc_safety), the machine I/O (mc_io), the
+// stepper axes (mc_step), the handwheel decoder and the LEDs. Mirrors rtl/mc_board.v, which documents how to
+// use it; the pins reach it through the board top (hls/motioncore_icebreaker.hpp).
 //
 // The sub-blocks are the twins of the RTL's instances, named as the RTL
 // names them, and wired as it wires them: clock() first takes every wire of
@@ -16,8 +16,10 @@
 #include "crc16_ccitt.hpp"
 #include "link_rx.hpp"
 #include "link_tx.hpp"
+#include "mc_io.hpp"
 #include "mc_regs.hpp"
 #include "mc_safety.hpp"
+#include "mc_step.hpp"
 #include "motion_core.hpp"
 #include "quad_decoder.hpp"
 #include "uart_rx.hpp"
@@ -33,15 +35,18 @@ struct McBoardIn {
   bool hw_a = false, hw_b = false;
   uint8_t lim = 0;                   // synchronized
   bool estop = false, stop = false;  // synchronized
+  bool probe = false;                // synchronized
 };
 
 template <int NAXES = 3, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 4, int CLK_HZ = 12'000'000,
-          int BAUD = 1'000'000, bool HANDWHEEL = true>
+          int BAUD = 1'000'000, bool HANDWHEEL = true, int STEPPERS = 0>
 class McBoard {
  public:
   using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true>;  // IDX_RAM: as the board builds it
   using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD>;
   using Safety = McSafety<NAXES>;
+  using Io = McIo<NAXES>;
+  using Step = McStep<NAXES, STEPPERS>;
   using Handwheel = QuadDecoder<FILT_W, 2, 2, 2, false, false>;  // position only, no load
   static constexpr int HB_W = clog2(CLK_HZ);                     // heartbeat counter bits
   static constexpr uint8_t AXES = (1u << NAXES) - 1;
@@ -53,14 +58,22 @@ class McBoard {
   Regs u_regs;
   Safety u_safety;
   Core u_core;
+  Io u_io;
+  Step u_step;
   Handwheel u_hw;  // unused without HANDWHEEL
   uint32_t hb = 0;
 
   // ---- outputs (all from registers) ----------------------------------------
   bool tx_o() const { return u_utx.tx_o; }
-  bool pwm_o(int a) const { return u_core.pwm(a); }
-  bool dir_o(int a) const { return u_core.dir(a); }
-  bool drv_en_o(int a) const { return u_core.drv_en(a); }
+  bool pwm_o(int a) const { return u_step.pwm_o(a, u_core.pwm(a)); }
+  bool dir_o(int a) const { return u_step.dir_o(a, u_core.dir(a)); }
+  // A stepper axis's driver is enabled while the drives are armed.
+  bool drv_en_o(int a) const { return u_core.drv_en(a) || (u_safety.armed_o && (u_step.stepper >> a & 1)); }
+  bool sp_pwm_o() const { return u_io.r.sp_pwm_o; }
+  bool sp_en_o() const { return u_io.r.sp_en_o; }
+  bool sp_dir_o() const { return u_io.r.sp_dir_o; }
+  bool flood_o() const { return u_io.r.flood_o; }
+  bool mist_o() const { return u_io.r.mist_o; }
   bool led_fault_o() const { return u_safety.fault_o != 0; }
   bool led_ok_o() const { return u_safety.armed_o || (!led_fault_o() && (hb >> (HB_W - 1) & 1)); }
 
@@ -77,6 +90,8 @@ class McBoard {
     regs_changed_ = u_regs.clock(w.regs);
     u_safety.clock(w.safety);
     u_core.clock(core_in_);
+    u_io.clock(w.io);
+    u_step.clock(w.step);
     if constexpr (HANDWHEEL) {
       if (u_hw.quiet(w.hw))
         u_hw.skip(1);  // settled: the same as step(), for less work
@@ -108,6 +123,7 @@ class McBoard {
     const uint32_t t = u_core.quiet_limit();  // no tick, drive update or done in the n clocks
     if (t < n) n = t;
     if (n == 0 || !u_core.quiet(core_in_, n)) return 0;
+    if (!u_io.quiet(w.io) || !u_step.quiet(w.step)) return 0;
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;
     return n;
@@ -119,6 +135,7 @@ class McBoard {
     u_ltx.skip(n);
     u_safety.skip(n);
     u_core.skip(n);
+    u_io.skip(n, u_safety.armed_o);
     if constexpr (HANDWHEEL) u_hw.skip(n);
     hb = (hb + n) & ((1u << HB_W) - 1);
   }
@@ -130,6 +147,8 @@ class McBoard {
     LinkTxIn ltx;
     typename Regs::In regs;
     McSafetyIn safety;
+    McIoIn io;
+    McStepIn step;
     QuadIn hw;
   };
 
@@ -157,17 +176,42 @@ class McBoard {
     s.estop = in.estop;
     s.stop = in.stop;
     s.lim = uint8_t(in.lim & AXES);
-    s.ferr = rr.ferr_o;
+    s.ferr = uint8_t(rr.ferr_o | u_step.ferr_o());
 
     // motion_core: the pins every clock; what comes from the register file
     // and the arm state only when either may have changed (the register
     // file's idle clocks change nothing).
+    // Stepper axes: the generators take the command's low bits; an
+    // open-loop axis's decoder counts the steps sent instead of its pins.
+    McStepIn& st = w.step;
+    st.rst = in.rst;
+    st.bus_we = u_regs.bus_we_o();
+    st.bus_addr = u_regs.bus_addr_o();
+    st.bus_wdata = data;
+    st.cmd = 0;
+    for (int a = 0; a < NAXES; ++a)
+      st.cmd = uint8_t(st.cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
+    st.sync = uint8_t(u_regs.ip_set_o() & AXES);
+    st.allow = armed;
+    st.clr = uint8_t(rr.fclr_o >> board::bits::F_FERR_LSB & AXES);
+    st.enc_a = uint8_t(in.enc_a & AXES);
+    st.enc_b = uint8_t(in.enc_b & AXES);
+    const uint8_t qa = u_step.enc_a_o(st.enc_a), qb = u_step.enc_b_o(st.enc_b);
+
+    // motion_core: the pins and the I/O block's strobes every clock; what
+    // comes from the register file and the arm state only when either may
+    // have changed (the register file's idle clocks change nothing).
+    const auto& io = u_io.r;
     MotionIn<NAXES>& m = core_in_;
     for (int a = 0; a < NAXES; ++a) {
-      m.enc_a[a] = in.enc_a >> a & 1;
-      m.enc_b[a] = in.enc_b >> a & 1;
+      m.enc_a[a] = qa >> a & 1;
+      m.enc_b[a] = qb >> a & 1;
       m.enc_z[a] = in.enc_z >> a & 1;
+      m.enc_latch[a] = io.latch_o >> a & 1;
     }
+    m.ip_jog = io.jog_o;
+    m.ip_jog_neg = io.jog_neg_o;
+    m.ip_abort = rr.ip_abort_o || io.stop_o;
     if (regs_changed_ || in.rst != m.rst || armed != m.drv_allow[0]) {
       m.rst = in.rst;
       m.pid_we = pid_we;
@@ -176,7 +220,6 @@ class McBoard {
       m.pid_re = u_regs.pid_re_o();
       m.seg_wr = rr.seg_wr_o;
       m.seg_wdata = data;
-      m.ip_abort = rr.ip_abort_o;
       m.ip_hold = rr.ip_hold_o || !armed;
       m.ip_clr = rr.ip_clr_o;
       m.ip_set = u_regs.ip_set_o();
@@ -228,7 +271,7 @@ class McBoard {
       err |= uint32_t(d.err()) << a;
       armd |= uint32_t(d.idx_armed()) << a;
       seen |= uint32_t(d.idx_seen()) << a;
-      den |= uint32_t(u_core.drv_en(a)) << a;
+      den |= uint32_t(drv_en_o(a)) << a;  // a stepper's enable too
       pen |= uint32_t(pid.enabled(a)) << a;
     }
     ri.enc_err = uint8_t(err);
@@ -246,6 +289,7 @@ class McBoard {
     ri.done = pid.done();
     ri.smp_rdata = u_core.smp_rdata();
     ri.hw_pos = HANDWHEEL ? uint32_t(u_hw.pos()) : 0;
+    ri.io_stat = u_io.stat_o() | uint32_t(u_step.err_o()) << board::bits::IOS_STEP_ERR_LSB;
     s.enc_err = ri.enc_err;
     s.kick = u_regs.kick_o(ri);
     ri.estop_act = u_safety.estop_act_o(s);
@@ -265,6 +309,20 @@ class McBoard {
     t.wbase = rr.tx_wbase_o;
     t.nwords = rr.tx_nwords_o;
     t.ready = u_utx.ready_o();
+
+    // Machine I/O.
+    McIoIn& io_in = w.io;
+    io_in.rst = in.rst;
+    io_in.bus_we = st.bus_we;
+    io_in.bus_addr = st.bus_addr;
+    io_in.bus_wdata = data;
+    io_in.armed = armed;
+    io_in.lim_inv = uint8_t(rr.safety_o >> board::bits::S_LIM_INV_LSB & AXES);
+    io_in.lim = uint8_t(in.lim & AXES);
+    io_in.probe = in.probe;
+    io_in.idx_armed = ri.enc_idx_armed;
+    io_in.ip_idle = !ip.busy() && ip.count() == 0;
+    io_in.hw_pos = uint8_t(ri.hw_pos);
 
     // Handwheel.
     QuadIn& h = w.hw;

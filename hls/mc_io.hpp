@@ -192,15 +192,24 @@ class McIo {
 
   // ---- fast-forward ----------------------------------------------------------
   // With these inputs held, a clock changes nothing but the spindle's PWM
-  // counter (and its pin): no bus write, the switches settled, no detent,
-  // nothing pending, every other output at the value it is being given.
+  // counter (and its pin): no bus write, the switches settled, no strobe,
+  // the jog timer run out, no detent, nothing pending that may move (or
+  // MPG off with the handwheel where it was), every other output at the
+  // value it is being given.
   bool quiet(const McIoIn& in) const {
     if (in.rst || in.bus_we) return false;
     if (sw_in(r, in) != r.sw) return false;
     for (int i = 0; i < NS; ++i)
       if (r.sw_cnt[i] != 0) return false;
-    if (r.latch_o != 0 || r.stop_o || r.jog_o != 0 || r.pend != 0 || r.tmr != 0 || r.jog_neg_o) return false;
-    if (in.hw_pos != r.ref_pos) return false;
+    if (r.latch_o != 0 || r.stop_o || r.jog_o != 0 || r.tmr != 0 || r.jog_neg_o != bool(r.pend >> 15 & 1))
+      return false;
+    if (!r.m_on) {
+      if (in.hw_pos != r.ref_pos || r.pend != 0) return false;
+    } else {
+      const uint8_t hd = uint8_t(in.hw_pos - r.ref_pos), det = r.m_det1 ? 1 : 4;
+      if ((!(hd & 0x80) && hd >= det) || ((hd & 0x80) && uint8_t(0 - hd) >= det)) return false;
+      if (r.pend != 0 && in.armed && in.ip_idle) return false;
+    }
     const bool on = in.armed && r.sp_on;
     const bool steady_pwm = !on || r.duty == 0 || r.duty == 0x3FF;
     return r.sp_en_o == on && r.sp_dir_o == (in.armed && (r.mist_on_dir ? r.mist : r.sp_on && r.sp_rev)) &&

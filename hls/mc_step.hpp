@@ -63,18 +63,45 @@ class McStep {
   uint8_t ferr_o() const {
     return bits([this](int a) { return fe[a]; });
   }
+  // The pins' multiplexers, axis by axis: a stepper axis drives STEP/DIR,
+  // an open-loop one feeds its decoder the steps sent.
+  bool pwm_o(int a, bool pwm) const {
+    return stepper >> a & 1 ? u_gen[a].step_o != bool(step_inv >> a & 1) : pwm;
+  }
+  bool dir_o(int a, bool dir) const {
+    return stepper >> a & 1 ? u_gen[a].dir_o != bool(dir_rev >> a & 1) : dir;
+  }
+  uint8_t enc_a_o(uint8_t enc_a) const {
+    return mux(enc_a, [this](int a) { return bool((q[a] >> 1 ^ q[a]) & 1); });
+  }
+  uint8_t enc_b_o(uint8_t enc_b) const {
+    return mux(enc_b, [this](int a) { return bool(q[a] >> 1 & 1); });
+  }
   McStepOut out(const McStepIn& in) const {
     McStepOut o;
+    o.enc_a = enc_a_o(in.enc_a);
+    o.enc_b = enc_b_o(in.enc_b);
     for (int a = 0; a < NAXES; ++a) {
-      const uint8_t m = uint8_t(1u << a);
-      const bool st = stepper & m, loop = st && !(closed & m);
-      const bool qa = (q[a] >> 1 ^ q[a]) & 1, qb = q[a] >> 1 & 1;
-      o.enc_a = uint8_t(o.enc_a | (loop ? qa : (in.enc_a & m) != 0) << a);
-      o.enc_b = uint8_t(o.enc_b | (loop ? qb : (in.enc_b & m) != 0) << a);
-      o.pwm = uint8_t(o.pwm | (st ? u_gen[a].step_o != ((step_inv & m) != 0) : (in.pwm & m) != 0) << a);
-      o.dir = uint8_t(o.dir | (st ? u_gen[a].dir_o != ((dir_rev & m) != 0) : (in.dir & m) != 0) << a);
+      o.pwm = uint8_t(o.pwm | uint32_t(pwm_o(a, in.pwm >> a & 1)) << a);
+      o.dir = uint8_t(o.dir | uint32_t(dir_o(a, in.dir >> a & 1)) << a);
     }
     return o;
+  }
+
+  // With these inputs held, a clock changes nothing: no STEP_CFG write, and
+  // every built generator idle with nothing owed, its command unchanged and
+  // its pins' edges already seen.
+  bool quiet(const McStepIn& in) const {
+    if (in.rst || (in.bus_we && in.bus_addr == (board::reg::STEP_CFG & 0x1F))) return false;
+    for (int a = 0; a < NAXES; ++a) {
+      if (!(BUILT >> a & 1)) continue;
+      const Gen& g = u_gen[a];
+      if (g.st != Gen::ST_IDLE || g.backlog_o != 0 || g.last != (in.cmd >> (2 * a) & 3) ||
+          (g.err_o && in.clr >> a & 1))
+        return false;
+      if (g.step_o != step_q[a] || g.err_o != err_q[a] || fe[a]) return false;
+    }
+    return true;
   }
 
   void clock(const McStepIn& in) {
@@ -117,6 +144,16 @@ class McStep {
   }
 
  private:
+  // Open-loop stepper axes take f(a), the others the pins.
+  template <class F>
+  uint8_t mux(uint8_t pins, F&& f) const {
+    uint8_t v = 0;
+    for (int a = 0; a < NAXES; ++a) {
+      const bool loop = (stepper >> a & 1) && !(closed >> a & 1);
+      v = uint8_t(v | uint32_t(loop ? f(a) : bool(pins >> a & 1)) << a);
+    }
+    return v;
+  }
   template <class F>
   static uint8_t bits(F&& f) {
     uint8_t v = 0;

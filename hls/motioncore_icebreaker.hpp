@@ -1,8 +1,9 @@
 // motioncore_icebreaker twin: the whole iCEBreaker board at its pins, clock
 // by clock. Mirrors rtl/motioncore_icebreaker.v: the power-on reset, the
 // two-flop synchronizers of every input but the encoders, the active-low
-// LEDs, and under them the board core (hls/mc_board.hpp). For the same pin
-// levels every clock it gives the RTL's TX, LED and drive pins bit for bit,
+// LEDs, the drivers' shared enable, and under them the board core
+// (hls/mc_board.hpp). For the same pin levels every clock it gives the
+// RTL's TX, LED, drive, spindle and coolant pins bit for bit,
 // from the same clock on (the RTL powers up at random; its reset makes the
 // difference unobservable).
 //
@@ -10,8 +11,8 @@
 //   MotioncoreIcebreaker<> b;       // power-up: reset runs for 15 clocks
 //   IcebreakerPins p;               // RX idle high, button up, all else low
 //   each clock: set p; b.step(p); read b.tx(), b.pwm(a), ... (the pins after the edge)
-// A host link at BAUD bit/s moves p.rx; encoders, limits, e-stop and the
-// button move their pins. For long stretches with the pins held,
+// A host link at BAUD bit/s moves p.rx; encoders, limits (home switches),
+// the probe, e-stop and the button move their pins. For long stretches with the pins held,
 // run(p, n) does n clocks exactly as n step(p) would, but skips at once
 // the clocks in which only counters move (idle_clocks/advance): the UART
 // idle, no frame being worked on, no PID sample due, no timer expiring.
@@ -29,21 +30,23 @@ namespace mc {
 // The board's input pins (rtl/motioncore_icebreaker.v's names; per axis
 // [0] X, [1] Y, [2] Z).
 struct IcebreakerPins {
-  bool rx = true;      // RX: FTDI UART, idles high
-  bool btn_n = true;   // BTN_N: the user button, low when pressed (a local stop)
-  bool estop = false;  // ESTOP
-  bool enc_a[3] = {}, enc_b[3] = {}, enc_z[3] = {};  // X_ENC_A, ...
-  bool lim[3] = {};                                  // X_LIM, ...
-  bool hw_a = false, hw_b = false;                   // HW_A, HW_B: the handwheel
+  bool rx = true;                     // RX: FTDI UART, idles high
+  bool btn_n = true;                  // BTN_N: the user button, low when pressed (a local stop)
+  bool estop = false;                 // ESTOP
+  bool probe = false;                 // PROBE
+  bool enc_a[3] = {}, enc_b[3] = {};  // X_ENC_A, ... (no index pins on this board)
+  bool lim[3] = {};                   // X_LIM, ...: limit and home switches
+  bool hw_a = false, hw_b = false;    // HW_A, HW_B: the handwheel
 };
 
-template <int NAXES = 3, int CLK_HZ = 12'000'000, int BAUD = 1'000'000, bool HANDWHEEL = true>
+template <int NAXES = 3, int CLK_HZ = 12'000'000, int BAUD = 1'000'000, bool HANDWHEEL = true,
+          int STEPPERS = 0>
 class MotioncoreIcebreaker {
   static_assert(NAXES >= 1 && NAXES <= 3, "motioncore_icebreaker: NAXES must be 1..3");
 
  public:
-  using Board = McBoard<NAXES, 9, 9, 4, CLK_HZ, BAUD, HANDWHEEL>;
-  static constexpr int NS = 3 + NAXES;  // synchronized inputs: {RX, button, e-stop, limits}
+  using Board = McBoard<NAXES, 9, 9, 4, CLK_HZ, BAUD, HANDWHEEL, STEPPERS>;
+  static constexpr int NS = 4 + NAXES;  // synchronized inputs: {RX, probe, button, e-stop, limits}
 
   uint8_t por = 0;         // power-on reset counter, 4 bits
   uint8_t s1 = 0, s2 = 0;  // the synchronizers, NS bits
@@ -53,9 +56,17 @@ class MotioncoreIcebreaker {
 
   // The output pins after the last edge.
   bool tx() const { return u_board.tx_o(); }
-  bool pwm(int a) const { return a < NAXES && u_board.pwm_o(a); }
+  bool pwm(int a) const { return a < NAXES && u_board.pwm_o(a); }  // STEP on a stepper axis
   bool dir(int a) const { return a < NAXES && u_board.dir_o(a); }
-  bool en(int a) const { return a < NAXES && u_board.drv_en_o(a); }
+  bool drv_en() const {  // DRV_EN: every driver's enable
+    for (int a = 0; a < NAXES; ++a)
+      if (u_board.drv_en_o(a)) return true;
+    return false;
+  }
+  bool sp_pwm() const { return u_board.sp_pwm_o(); }
+  bool sp_en() const { return u_board.sp_en_o(); }
+  bool sp_dir() const { return u_board.sp_dir_o(); }  // or mist (IO_CTRL.mist_on_dir)
+  bool flood() const { return u_board.flood_o(); }
   bool ledr_n() const { return !u_board.led_fault_o(); }
   bool ledg_n() const { return !u_board.led_ok_o(); }
   // After how many of the next n edges axis a's PWM pin is high, when
@@ -115,7 +126,8 @@ class MotioncoreIcebreaker {
 
  private:
   uint8_t sync_in(const IcebreakerPins& p) const {
-    uint32_t v = uint32_t(p.rx) << (NS - 1) | uint32_t(!p.btn_n) << (NAXES + 1) | uint32_t(p.estop) << NAXES;
+    uint32_t v = uint32_t(p.rx) << (NS - 1) | uint32_t(p.probe) << (NAXES + 2) |
+                 uint32_t(!p.btn_n) << (NAXES + 1) | uint32_t(p.estop) << NAXES;
     for (int a = 0; a < NAXES; ++a) v |= uint32_t(p.lim[a]) << a;
     return uint8_t(v);
   }
@@ -123,13 +135,13 @@ class MotioncoreIcebreaker {
     McBoardIn b;
     b.rst = rst();
     b.rx = s2 >> (NS - 1) & 1;
+    b.probe = s2 >> (NAXES + 2) & 1;
     b.stop = s2 >> (NAXES + 1) & 1;
     b.estop = s2 >> NAXES & 1;
     b.lim = uint8_t(s2 & ((1u << NAXES) - 1));
     for (int a = 0; a < NAXES; ++a) {
       b.enc_a = uint8_t(b.enc_a | uint32_t(p.enc_a[a]) << a);
       b.enc_b = uint8_t(b.enc_b | uint32_t(p.enc_b[a]) << a);
-      b.enc_z = uint8_t(b.enc_z | uint32_t(p.enc_z[a]) << a);
     }
     b.hw_a = p.hw_a;
     b.hw_b = p.hw_b;
@@ -137,11 +149,9 @@ class MotioncoreIcebreaker {
   }
   static uint32_t pins_word(const IcebreakerPins& p) {
     uint32_t w = uint32_t(p.rx) | uint32_t(p.btn_n) << 1 | uint32_t(p.estop) << 2 | uint32_t(p.hw_a) << 3 |
-                 uint32_t(p.hw_b) << 4;
+                 uint32_t(p.hw_b) << 4 | uint32_t(p.probe) << 5;
     for (int a = 0; a < 3; ++a)
-      w |= (uint32_t(p.enc_a[a]) | uint32_t(p.enc_b[a]) << 1 | uint32_t(p.enc_z[a]) << 2 |
-            uint32_t(p.lim[a]) << 3)
-           << (5 + 4 * a);
+      w |= (uint32_t(p.enc_a[a]) | uint32_t(p.enc_b[a]) << 1 | uint32_t(p.lim[a]) << 2) << (6 + 3 * a);
     return w;
   }
 

@@ -266,23 +266,23 @@ TEST(BoardRtl, CopiesOfAFullFrameAreRefusedFullToo) {
   FAIL() << "the queue never filled";
 }
 
-// Arms the board with an override drive on axis 0, so its EN pin shows
+// Arms the board with an override drive on axis 0, so the DRV_EN pin shows
 // whether the drive is allowed.
 void arm_with_drive(BoardTb& tb) {
   tb.write(ax(0, br::AX_DRV), 1u << bb::D_OVR | 0x4000);
   tb.write(br::CTRL, 1u << bb::C_ARM);
   tb.run(10);
   ASSERT_TRUE(tb.read(br::STATUS) & (1u << bb::ST_ARMED));
-  ASSERT_TRUE(tb.pins().X_EN);
+  ASSERT_TRUE(tb.pins().DRV_EN);
 }
 
 void expect_fault_then_clear(BoardTb& tb, uint32_t bit, const char* what) {
   SCOPED_TRACE(what);
-  EXPECT_FALSE(tb.pins().X_EN) << "the drive must be off";
+  EXPECT_FALSE(tb.pins().DRV_EN) << "the drive must be off";
   EXPECT_EQ(tb.read(br::FAULT), bit);
   EXPECT_FALSE(tb.read(br::STATUS) & (1u << bb::ST_ARMED));
   tb.write(br::CTRL, 1u << bb::C_ARM);  // refused while the fault is latched
-  EXPECT_FALSE(tb.pins().X_EN);
+  EXPECT_FALSE(tb.pins().DRV_EN);
 }
 
 TEST(BoardRtl, WatchdogDisablesTheDrivesWhenTheHostGoesQuiet) {
@@ -295,11 +295,11 @@ TEST(BoardRtl, WatchdogDisablesTheDrivesWhenTheHostGoesQuiet) {
     tb.run(period / 2);
     tb.transact(hp::ping(tb.next_seq()));
   }
-  EXPECT_TRUE(tb.pins().X_EN);
+  EXPECT_TRUE(tb.pins().DRV_EN);
   EXPECT_EQ(tb.read(br::FAULT), 0u);
   // Quiet: the drive goes off within the period.
   long n = 0;
-  while (tb.pins().X_EN && n < 2L * period) {
+  while (tb.pins().DRV_EN && n < 2L * period) {
     tb.clock();
     ++n;
   }
@@ -308,10 +308,10 @@ TEST(BoardRtl, WatchdogDisablesTheDrivesWhenTheHostGoesQuiet) {
   expect_fault_then_clear(tb, 1u << bb::F_WDOG, "watchdog");
   tb.write(br::FAULT, 1u << bb::F_WDOG);
   EXPECT_EQ(tb.read(br::FAULT), 0u);
-  EXPECT_FALSE(tb.pins().X_EN) << "clearing a fault does not re-arm";
+  EXPECT_FALSE(tb.pins().DRV_EN) << "clearing a fault does not re-arm";
   tb.write(br::CTRL, 1u << bb::C_ARM);
   tb.run(5);
-  EXPECT_TRUE(tb.pins().X_EN);
+  EXPECT_TRUE(tb.pins().DRV_EN);
 }
 
 TEST(BoardRtl, EveryFaultSourceLatchesAndClears) {
@@ -347,7 +347,7 @@ TEST(BoardRtl, EveryFaultSourceLatchesAndClears) {
   arm_with_drive(tb);
   p.Y_LIM = 1;
   tb.run(10);
-  EXPECT_TRUE(p.X_EN);
+  EXPECT_TRUE(p.DRV_EN);
   p.Y_LIM = 0;
   tb.write(br::SAFETY, bb::SAFETY_DEFAULT);
 
@@ -426,22 +426,28 @@ TEST(BoardRtl, DriveOverrideAppliesAndReleases) {
   for (int16_t v : {int16_t(0x4000), int16_t(-0x2000), int16_t(32767)}) {
     tb.write(ax(1, br::AX_DRV), 1u << bb::D_OVR | uint16_t(v));
     EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 1u << bb::D_OVR | uint16_t(v));
-    EXPECT_TRUE(p.Y_EN);
+    EXPECT_TRUE(p.DRV_EN);
     EXPECT_EQ(bool(p.Y_DIR), v < 0);
     EXPECT_NEAR(duty(), std::abs(v) >> 6, 1) << v;
   }
   tb.write(ax(1, br::AX_DRV), 0);
   tb.run(200);  // the next sample
   EXPECT_EQ(tb.read(ax(1, br::AX_DRV)), 0u);
-  EXPECT_FALSE(p.Y_EN);
+  EXPECT_FALSE(p.DRV_EN);
   EXPECT_EQ(duty(), 0);
 }
 
-// The index latch (in block RAM on the board): IDX holds the count at the
-// index edge, and with "index clears" the count restarts from 0 there.
-TEST(BoardRtl, IndexLatchesThePosition) {
+// The home-switch latch (the index latch, in block RAM, fed by mc_io): IDX
+// holds the count at the switch's filtered edge, and with "index clears" the
+// count restarts from 0 there. The iCEBreaker has no index pins; the home
+// switch is the axis's limit input, its fault disabled while homing.
+TEST(BoardRtl, HomeSwitchLatchesThePosition) {
   BoardTb tb;
   auto& p = tb.pins();
+  // X's and Y's limits: home switches only.
+  tb.write(br::SAFETY, bb::SAFETY_DEFAULT & ~(3u << bb::S_LIM_EN_LSB));
+  tb.write(br::LATCH, bb::L_SRC_HOME << bb::L_SRC_LSB | bb::L_SRC_NONE << (bb::L_SRC_LSB + 2) |
+                          bb::L_SRC_NONE << (bb::L_SRC_LSB + 4));
   int phase = 0;
   auto move = [&](int steps) {  // quadrature steps on X, 20 clocks each
     for (int i = 0; i < std::abs(steps); ++i) {
@@ -451,26 +457,37 @@ TEST(BoardRtl, IndexLatchesThePosition) {
       tb.run(20);
     }
   };
-  auto index = [&] {
+  auto home = [&] {
     tb.write(ax(0, br::AX_IDX), 1u << bb::X_ARM);
-    p.X_ENC_Z = 1;
+    p.X_LIM = 1;
+    p.Y_LIM = 1;  // Y's switch latches nothing: its source is none
     tb.run(20);
-    p.X_ENC_Z = 0;
+    p.X_LIM = 0;
+    p.Y_LIM = 0;
     tb.run(200);  // a sample for POS
   };
   move(37);
-  index();
+  home();
   EXPECT_EQ(tb.read(ax(0, br::AX_IDX)), 37u);
   EXPECT_EQ(tb.read(ax(0, br::AX_POS)), 37u);
+  EXPECT_EQ(tb.read(br::FAULT), 0u) << "a disabled limit is only a home switch";
   move(-50);
   tb.write(ax(0, br::AX_ENC_CFG), 1u << bb::E_IDX_CLR_EN);
-  index();
+  home();
   EXPECT_EQ(int32_t(tb.read(ax(0, br::AX_IDX))), -13);
-  EXPECT_EQ(tb.read(ax(0, br::AX_POS)), 0u) << "the index cleared the count";
+  EXPECT_EQ(tb.read(ax(0, br::AX_POS)), 0u) << "the switch cleared the count";
   move(5);
   tb.run(200);
   EXPECT_EQ(tb.read(ax(0, br::AX_POS)), 5u);
   EXPECT_EQ(int32_t(tb.read(ax(0, br::AX_IDX))), -13);
+  // A bounce shorter than the filter's four clocks latches nothing.
+  tb.write(ax(0, br::AX_IDX), 1u << bb::X_ARM);
+  p.X_LIM = 1;
+  tb.run(3);
+  p.X_LIM = 0;
+  tb.run(200);
+  EXPECT_EQ(int32_t(tb.read(ax(0, br::AX_IDX))), -13) << "a glitch latched";
+  EXPECT_TRUE(tb.read(ax(0, br::AX_ENC_STAT)) >> bb::ES_IDX_ARMED & 1) << "the latch is still armed";
 }
 
 // TLM.decim = N: a frame every N-th sample, the first N samples after the
@@ -543,29 +560,35 @@ TEST(BoardRtl, DriveOverrideHoldsUntilThePidsNextOutput) {
 
 // The board's decoders filter up to 15 clocks: a longer ENC_CFG length reads
 // back as written and acts as 15, never as its low bits (16 would be 0).
-// Seen through the index latch: a Z pulse arms nothing unless it passes.
+// Seen through the count: A and B each pulse high for the same clocks, B
+// two clocks behind A, a forward quadrature cycle (+4) if the filter
+// passes both pulses and no count if it drops them.
 TEST(BoardRtl, EncoderFilterLengthClampsToTheLongestBuilt) {
   BoardTb tb;
   auto& p = tb.pins();
-  auto z_pulse_seen = [&](int clocks) {
-    tb.write(ax(0, br::AX_IDX), 1u << bb::X_ARM);
-    p.X_ENC_Z = 1;
-    tb.run(clocks);
-    p.X_ENC_Z = 0;
-    tb.run(40);
-    const uint32_t st = tb.read(ax(0, br::AX_ENC_STAT));
-    EXPECT_EQ((st >> bb::ES_IDX_ARMED) & 1, (st >> bb::ES_IDX_SEEN) & 1 ? 0u : 1u);
-    return ((st >> bb::ES_IDX_SEEN) & 1) != 0;
+  auto a_pulse_passes = [&](int clocks) {
+    const int32_t before = int32_t(tb.read(ax(0, br::AX_POS)));
+    p.X_ENC_A = 1;
+    tb.run(2);
+    p.X_ENC_B = 1;
+    tb.run(clocks - 2);
+    p.X_ENC_A = 0;
+    tb.run(2);
+    p.X_ENC_B = 0;
+    tb.run(200);  // a sample for POS
+    const int32_t moved = int32_t(tb.read(ax(0, br::AX_POS))) - before;
+    EXPECT_TRUE(moved == 0 || moved == 4) << moved;
+    return moved == 4;
   };
   for (uint32_t len : {15u, 16u, 200u, 255u}) {
     tb.write(ax(0, br::AX_ENC_CFG), len);
     EXPECT_EQ(tb.read(ax(0, br::AX_ENC_CFG)), len);
-    EXPECT_FALSE(z_pulse_seen(14)) << "filter " << len;
-    EXPECT_TRUE(z_pulse_seen(15)) << "filter " << len;
+    EXPECT_FALSE(a_pulse_passes(14)) << "filter " << len;
+    EXPECT_TRUE(a_pulse_passes(15)) << "filter " << len;
   }
   tb.write(ax(0, br::AX_ENC_CFG), 13);
-  EXPECT_FALSE(z_pulse_seen(12));
-  EXPECT_TRUE(z_pulse_seen(13));
+  EXPECT_FALSE(a_pulse_passes(12));
+  EXPECT_TRUE(a_pulse_passes(13));
 }
 
 // Telemetry every sample, compared with the PID twin fed the sampled command

@@ -1,7 +1,8 @@
 // The twin of the whole board (hls/motioncore_icebreaker.hpp) against the
 // Verilated board top (rtl/motioncore_icebreaker.v), at the pins: both get the
-// same RX, encoder, limit, e-stop, button and handwheel levels every clock,
-// and their TX, LED and drive pins must agree every clock; the fault latches,
+// same RX, encoder, limit, probe, e-stop, button and handwheel levels every
+// clock, and their TX, LED, drive, spindle and coolant pins must agree every
+// clock; the fault latches,
 // the arm state, the executor's and the link's states and the register
 // file's RAM are compared too, so that a mismatch shows where it starts.
 //
@@ -9,8 +10,11 @@
 // every command and register, reads and writes, in range and out, segments,
 // telemetry, duplicates, bad CRCs, truncated and overlong frames, junk,
 // breaks, stop-bit errors, glitches and baud skew on the line, watchdog
-// expiry, and limits, e-stop, button, encoder errors and index pulses on the
-// pins. A profile per test weights them.
+// expiry, the machine I/O's registers (latches, spindle, handwheel jog,
+// stepper axes), and limits, probe, e-stop, button, encoder errors and the
+// handwheel on the pins. A profile per test weights them. Both boards are
+// built with a step generator on every axis (MC_VBOARD_STEPPERS), so the
+// stepper and the H-bridge pins are both covered.
 //
 // Then the twin's fast-forward (idle_clocks/advance) against clock-by-clock
 // stepping over random states, and the speed of the twin and of the
@@ -47,7 +51,7 @@ namespace br = board::reg;
 namespace bb = board::bits;
 namespace hp = host::proto;
 
-using Twin = MotioncoreIcebreaker<>;
+using Twin = MotioncoreIcebreaker<3, 12'000'000, 1'000'000, true, MC_VBOARD_STEPPERS>;
 using Vtop = Vmotioncore_icebreaker;
 constexpr long kClkHz = 12'000'000;
 constexpr int kCpb = sim::uart_clocks_per_bit(kClkHz, 1'000'000);
@@ -185,6 +189,15 @@ class Host {
           then(hp::write(seq_++, pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1));
           then(hp::write(seq_++, pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), irange(100, 3000)));
         }
+        if (chance(3))  // stepper axes, open or closed loop, and the segments the generators step
+          then(hp::write(seq_++, br::STEP_CFG,
+                         value(br::STEP_CFG) & ~(chance(2) ? 0u : 7u << bb::SC_CLOSED_LSB)));
+        if (chance(3)) {  // the machine I/O: latches on the probe or home switches, spindle, handwheel jog
+          then(hp::write(seq_++, br::LATCH, value(br::LATCH)));
+          for (int x = 0; x < 3; ++x) then(hp::write(seq_++, br::axis(x, br::AX_IDX), 1u << bb::X_ARM));
+          then(hp::write(seq_++, br::IO_CTRL, value(br::IO_CTRL)));
+          then(hp::write(seq_++, br::MPG, value(br::MPG) | 1u << bb::M_ON));
+        }
         if (chance(5))
           then(hp::write(seq_++, br::axis(a, br::AX_FERR), irange(1, 60)));  // a tight following-error limit
         if (chance(3)) then(hp::write(seq_++, br::TLM, irange(2, 30) | irange(0, 7) << bb::T_AXES_LSB));
@@ -281,7 +294,7 @@ class Host {
       case 1:
       case 2:
       case 3:
-        return uint16_t(br::ID + irange(0, 0x19));  // the globals, and a few past them
+        return uint16_t(br::ID + irange(0, 0x1F));  // the globals, and a few past them
       case 4:
       case 5:
       case 6:
@@ -348,6 +361,22 @@ class Host {
         return irange(0, 7);
       case br::HW_CFG:
         return irange(0, 0x3FF);
+      case br::IO_CTRL:
+        return chance(3) ? any : irange(0, 0x1F) | irange(0, 0x3FF) << bb::IO_DUTY_LSB;
+      case br::LATCH:  // each axis: none, index, home switch or probe; probe polarity; stop on a latch
+        return irange(0, 0x3F) << bb::L_SRC_LSB | irange(0, 1) << bb::L_PROBE_INV |
+               irange(0, 1) << bb::L_STOP;
+      case br::MPG:  // on, axis, step, one-count detents, a short rate
+        return (chance(4) ? 0 : 1u << bb::M_ON) | irange(0, 3) << bb::M_AXIS_LSB |
+               irange(0, 3) << bb::M_STEP_LSB | irange(0, 1) << bb::M_DETENT1 |
+               irange(0, 40) << bb::M_RATE_LSB;
+      case br::MPG_INC:
+        return chance(4) ? any : irange(0, 300);
+      case br::STEP_CFG:  // steppers, closed loop, short pulses and setups, inversions
+        return chance(8) ? any
+                         : irange(0, 7) << bb::SC_STEPPER_LSB | irange(0, 7) << bb::SC_CLOSED_LSB |
+                               irange(0, 6) << bb::SC_PW_LSB | irange(0, 6) << bb::SC_SETUP_LSB |
+                               irange(0, 7) << bb::SC_STEP_INV_LSB | irange(0, 7) << bb::SC_DIR_INV_LSB;
       default:
         return chance(2) ? irange(0, 2000) - 1000 : any;
     }
@@ -384,7 +413,12 @@ class PinGen {
       p.enc_a[a] = kA[x.count & 3];
       p.enc_b[a] = kB[x.count & 3];
       if (x.bad && rng_() % 3000 == 0) p.enc_a[a] = !p.enc_a[a];  // a one-clock glitch
-      p.enc_z[a] = (x.count & 511) == 3;
+    }
+    // The probe: touches now and then, with bounce.
+    if (rng_() % uint64_t(p_.pin_rate) == 0) probe_left_ = 200 + uint32_t(rng_() % 20'000);
+    if (probe_left_ > 0) {
+      --probe_left_;
+      p.probe = probe_left_ > 0 && (probe_left_ > 40 || rng_() % 2);
     }
     // Switches: now and then one trips, and is released after a while.
     if (rng_() % uint64_t(p_.pin_rate) == 0) {
@@ -393,12 +427,13 @@ class PinGen {
       s = !s;
       release_ = 100 + uint32_t(rng_() % 30'000);
     }
+    if (rng_() % 200'000 == 0) hw_fast_ = !hw_fast_;  // a handwheel turned fast for a while
     if (release_ > 0 && --release_ == 0) {
       for (bool& l : p.lim) l = false;
       p.estop = false;
       p.btn_n = true;
     }
-    if (rng_() % 700 == 0) {
+    if (rng_() % (hw_fast_ ? 40 : 700) == 0) {
       hw_ += rng_() % 2 ? 1 : -1;
       p.hw_a = hw_ & 1 ? !(hw_ & 2) : (hw_ & 2);
       p.hw_b = hw_ & 2;
@@ -415,8 +450,9 @@ class PinGen {
   std::mt19937_64 rng_;
   Profile p_;
   Axis ax_[3];
-  uint32_t release_ = 0;
+  uint32_t release_ = 0, probe_left_ = 0;
   int64_t hw_ = 0;
+  bool hw_fast_ = false;
 };
 
 // ---- the two boards ------------------------------------------------------------
@@ -425,15 +461,13 @@ void apply_pins(Vtop& t, const IcebreakerPins& p) {
   t.RX = p.rx;
   t.BTN_N = p.btn_n;
   t.ESTOP = p.estop;
+  t.PROBE = p.probe;
   t.X_ENC_A = p.enc_a[0];
   t.X_ENC_B = p.enc_b[0];
-  t.X_ENC_Z = p.enc_z[0];
   t.Y_ENC_A = p.enc_a[1];
   t.Y_ENC_B = p.enc_b[1];
-  t.Y_ENC_Z = p.enc_z[1];
   t.Z_ENC_A = p.enc_a[2];
   t.Z_ENC_B = p.enc_b[2];
-  t.Z_ENC_Z = p.enc_z[2];
   t.X_LIM = p.lim[0];
   t.Y_LIM = p.lim[1];
   t.Z_LIM = p.lim[2];
@@ -444,6 +478,7 @@ void apply_pins(Vtop& t, const IcebreakerPins& p) {
 // What the twin did, from its pins and registers: the test's coverage.
 struct Coverage {
   uint64_t clocks = 0, armed = 0, pwm_high = 0, tx_low = 0;
+  uint64_t steps = 0, jogs = 0, latches = 0, io_stops = 0, spindle_on = 0;
   uint64_t replies[6] = {}, telemetry = 0, bad_tx = 0;
   uint16_t faults_seen = 0;
   uint32_t link_crc = 0, link_framing = 0, link_nak = 0, link_dup = 0, link_junk = 0, segs = 0;
@@ -452,12 +487,14 @@ struct Coverage {
     std::printf(
         "%s (seed %llu): %llu clocks; replies ok %llu dup %llu bad_reg %llu bad_len %llu bad_cmd %llu full "
         "%llu; telemetry %llu; board counters crc %u framing %u nak %u dup %u junk %u; segments %u; faults "
-        "seen 0x%04x; armed %llu clocks, PWM high %llu\n",
+        "seen 0x%04x; armed %llu clocks, PWM high %llu; step pulses %llu, handwheel jogs %llu, latches %llu "
+        "(%llu stopping), spindle on %llu clocks\n",
         name, (unsigned long long)seed, (unsigned long long)clocks, (unsigned long long)replies[0],
         (unsigned long long)replies[1], (unsigned long long)replies[2], (unsigned long long)replies[3],
         (unsigned long long)replies[4], (unsigned long long)replies[5], (unsigned long long)telemetry,
         link_crc, link_framing, link_nak, link_dup, link_junk, segs, faults_seen, (unsigned long long)armed,
-        (unsigned long long)pwm_high);
+        (unsigned long long)pwm_high, (unsigned long long)steps, (unsigned long long)jogs,
+        (unsigned long long)latches, (unsigned long long)io_stops, (unsigned long long)spindle_on);
   }
 };
 
@@ -482,6 +519,13 @@ class Watcher {
     c.faults_seen |= b.u_safety.fault_o;
     for (int a = 0; a < 3; ++a) c.pwm_high += t.pwm(a);
     c.tx_low += !t.tx();
+    for (int a = 0; a < 3; ++a)
+      c.steps += b.u_step.stepper >> a & 1 && b.u_step.u_gen[a].st == Twin::Board::Step::Gen::ST_HIGH &&
+                 b.u_step.u_gen[a].tmr == 0;
+    c.jogs += b.u_io.r.jog_o != 0;
+    c.latches += b.u_io.r.latch_o != 0;
+    c.io_stops += b.u_io.r.stop_o;
+    c.spindle_on += t.sp_en();
   }
   static void counters(const Twin& t, Coverage& c) {
     const auto& sh = t.u_board.u_regs.shadow;
@@ -554,9 +598,11 @@ class Lockstep {
     check("X_DIR", t.X_DIR, w.dir(0));
     check("Y_DIR", t.Y_DIR, w.dir(1));
     check("Z_DIR", t.Z_DIR, w.dir(2));
-    check("X_EN", t.X_EN, w.en(0));
-    check("Y_EN", t.Y_EN, w.en(1));
-    check("Z_EN", t.Z_EN, w.en(2));
+    check("DRV_EN", t.DRV_EN, w.drv_en());
+    check("SP_PWM", t.SP_PWM, w.sp_pwm());
+    check("SP_EN", t.SP_EN, w.sp_en());
+    check("SP_DIR", t.SP_DIR, w.sp_dir());
+    check("FLOOD", t.FLOOD, w.flood());
     if (clocks_ < 20) return;  // the power-on reset has run
     // Internal state, where a mismatch starts.
     const auto& b = w.u_board;
@@ -572,6 +618,7 @@ class Lockstep {
     check("link_rx idle", VL(u_lrx__DOT__idle), b.u_lrx.idle);
     check("link_tx st", VL(u_ltx__DOT__st), b.u_ltx.st);
     check("regs xs", VL(u_regs__DOT__xs), r.xs);
+    if (VL(u_regs__DOT__ra) == r.ra) check("regs q", VL(u_regs__DOT__q), r.q);
     check("regs cnt_pend", VL(u_regs__DOT__cnt_pend), r.cnt_pend);
     check("regs rep_pend", VL(u_regs__DOT__rep_pend), r.rep_pend);
     check("regs tlm_pend", VL(u_regs__DOT__tlm_pend), r.tlm_pend);
@@ -585,6 +632,35 @@ class Lockstep {
     check("drv_ovr", VL(drv_ovr), r.drv_ovr_o);
     check("hw_pos", VL(hw_pos), uint32_t(b.u_hw.out().pos));
     check("seg_count", VL(seg_count), uint32_t(b.u_core.interp().count()));
+    check("io latch", VL(io_latch), b.u_io.r.latch_o);
+    check("io stop", VL(io_stop), b.u_io.r.stop_o);
+    check("io sw", VL(u_io__DOT__sw), b.u_io.r.sw);
+    check("io pend", VL(u_io__DOT__pend), b.u_io.r.pend);
+    check("io jog", VL(ip_jog), b.u_io.r.jog_o);
+    check("stepper", VL(u_step__DOT__stepper), b.u_step.stepper);
+    check("closed", VL(u_step__DOT__closed), b.u_step.closed);
+#define STEP_GEN(a, f) VL(u_step__DOT__g_ax__BRA__##a##__KET____DOT__g_gen__DOT__##f)
+#define CHECK_STEP(a)                                                                     \
+  check("step backlog", STEP_GEN(a, u_gen__DOT__backlog_o), b.u_step.u_gen[a].backlog_o); \
+  check("step last", STEP_GEN(a, u_gen__DOT__last), b.u_step.u_gen[a].last);              \
+  check("step st", STEP_GEN(a, u_gen__DOT__st), b.u_step.u_gen[a].st);                    \
+  check("step q", STEP_GEN(a, q), b.u_step.q[a]);                                         \
+  check("step err", STEP_GEN(a, err_q), b.u_step.err_q[a]);                               \
+  check("step ferr", STEP_GEN(a, fe), b.u_step.fe[a]);
+    CHECK_STEP(0)
+    CHECK_STEP(1)
+    CHECK_STEP(2)
+#undef CHECK_STEP
+#undef STEP_GEN
+#define CHECK_POS(a)                                                                     \
+  check("cmd", VL(u_core__DOT__u_interp__DOT__g_pos__BRA__##a##__KET____DOT__p),         \
+        uint32_t(b.u_core.interp().pos(a)));                                             \
+  check("pos", VL(u_core__DOT____Vcellout__g_enc__BRA__##a##__KET____DOT__u_dec__pos_o), \
+        uint32_t(b.u_core.decoder(a).pos()));
+    CHECK_POS(0)
+    CHECK_POS(1)
+    CHECK_POS(2)
+#undef CHECK_POS
     for (int a = 0; a < 3; ++a)
       check("drv_cmd", vl::get_bits(VL(drv_cmd), 16 * a, 16), uint16_t(b.u_core.drv_cmd(a)));
     if (clocks_ % 1024 == 0)
@@ -881,6 +957,8 @@ std::string state_diff(const Twin& x, const Twin& y) {
   same("interp phase", cx.interp().phase(), cy.interp().phase());
   same("interp state", uint64_t(cx.interp().state()), uint64_t(cy.interp().state()));
   same("handwheel", bx.u_hw.out() == by.u_hw.out(), true);
+  same("mc_io", bx.u_io == by.u_io, true);
+  same("mc_step", bx.u_step == by.u_step, true);
 #undef SAME
 #undef SAMEB
 #undef SAMER
@@ -890,8 +968,9 @@ std::string state_diff(const Twin& x, const Twin& y) {
 
 bool same_pins(const Twin& x, const Twin& y) {
   bool ok = x.tx() == y.tx() && x.ledr_n() == y.ledr_n() && x.ledg_n() == y.ledg_n();
-  for (int a = 0; a < 3; ++a) ok = ok && x.pwm(a) == y.pwm(a) && x.dir(a) == y.dir(a) && x.en(a) == y.en(a);
-  return ok;
+  for (int a = 0; a < 3; ++a) ok = ok && x.pwm(a) == y.pwm(a) && x.dir(a) == y.dir(a);
+  return ok && x.drv_en() == y.drv_en() && x.sp_pwm() == y.sp_pwm() && x.sp_en() == y.sp_en() &&
+         x.sp_dir() == y.sp_dir() && x.flood() == y.flood();
 }
 
 // Quiet stretches: long pauses on the line, encoders mostly still.

@@ -15,7 +15,7 @@ class TwinBoard final : public BoardModel {
     if (n > 0) {
       // EN and DIR hold through the stretch; PWM follows its counter.
       for (int a = 0; a < kBoardAxes; ++a)
-        if (b_.en(a)) {
+        if (b_.drv_en()) {
           const int32_t high = int32_t(b_.pwm_high_in(a, n));
           drive[a] += b_.dir(a) ? -high : high;
         }
@@ -28,21 +28,23 @@ class TwinBoard final : public BoardModel {
     const auto& regs = b_.u_board.u_regs;
     if (seg_tap_ && regs.r.seg_wr_o) seg_tap_->push_back(regs.data_o());
     for (int a = 0; a < kBoardAxes; ++a)
-      if (b_.en(a) && b_.pwm(a)) drive[a] += b_.dir(a) ? -1 : 1;
+      if (b_.drv_en() && b_.pwm(a)) drive[a] += b_.dir(a) ? -1 : 1;
     return 1;
   }
   bool tx() const override { return b_.tx(); }
-  bool en(int axis) const override { return b_.en(axis); }
+  bool drv_en() const override { return b_.drv_en(); }
   uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) override { return b_.idle_clocks(p, limit); }
   int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
-    if (!b_.en(a)) return 0;
+    if (!b_.drv_en()) return 0;
     const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
     return b_.dir(a) ? -high : high;
   }
   void advance(const IcebreakerPins& p, uint32_t n) override { b_.advance(p, n); }
 
  private:
-  MotioncoreIcebreaker<kBoardAxes> b_;
+  // Built as the Verilated top is (sim/vboard/CMakeLists.txt): a step
+  // generator on every axis, STEP_CFG choosing which axes use it.
+  MotioncoreIcebreaker<kBoardAxes, 12'000'000, 1'000'000, true, MC_VBOARD_STEPPERS> b_;
 };
 
 // The Verilated top, one clock per call; the harness writes only the input
@@ -57,12 +59,12 @@ class RtlBoard final : public BoardModel {
     ctx_->randSeed(int(seed & 0x7fffffff));
     top_ = std::make_unique<Vmotioncore_icebreaker>(ctx_.get(), "board");
     Vmotioncore_icebreaker& t = *top_;
-    enc_[0] = {&t.X_ENC_A, &t.X_ENC_B, &t.X_ENC_Z, &t.X_LIM};
-    enc_[1] = {&t.Y_ENC_A, &t.Y_ENC_B, &t.Y_ENC_Z, &t.Y_LIM};
-    enc_[2] = {&t.Z_ENC_A, &t.Z_ENC_B, &t.Z_ENC_Z, &t.Z_LIM};
-    drv_[0] = {&t.X_PWM, &t.X_DIR, &t.X_EN};
-    drv_[1] = {&t.Y_PWM, &t.Y_DIR, &t.Y_EN};
-    drv_[2] = {&t.Z_PWM, &t.Z_DIR, &t.Z_EN};
+    enc_[0] = {&t.X_ENC_A, &t.X_ENC_B, &t.X_LIM};
+    enc_[1] = {&t.Y_ENC_A, &t.Y_ENC_B, &t.Y_LIM};
+    enc_[2] = {&t.Z_ENC_A, &t.Z_ENC_B, &t.Z_LIM};
+    drv_[0] = {&t.X_PWM, &t.X_DIR};
+    drv_[1] = {&t.Y_PWM, &t.Y_DIR};
+    drv_[2] = {&t.Z_PWM, &t.Z_DIR};
     t.CLK = 0;
     write_all(last_);
     t.eval();
@@ -84,37 +86,36 @@ class RtlBoard final : public BoardModel {
     if (seg_tap_ && t.rootp->motioncore_icebreaker__DOT__u_board__DOT__seg_wr)
       seg_tap_->push_back(t.rootp->motioncore_icebreaker__DOT__u_board__DOT__u_regs__DOT__data);
     for (int a = 0; a < kBoardAxes; ++a)
-      if (*drv_[a].en && *drv_[a].pwm) drive[a] += *drv_[a].dir ? -1 : 1;
+      if (t.DRV_EN && *drv_[a].pwm) drive[a] += *drv_[a].dir ? -1 : 1;
     return 1;
   }
   bool tx() const override { return top_->TX; }
-  bool en(int axis) const override { return *drv_[axis].en; }
+  bool drv_en() const override { return top_->DRV_EN; }
 
  private:
   struct EncPorts {
-    uint8_t *a, *b, *z, *lim;
+    uint8_t *a, *b, *lim;
   };
   struct DrvPorts {
-    const uint8_t *pwm, *dir, *en;
+    const uint8_t *pwm, *dir;
   };
   static bool same(const IcebreakerPins& x, const IcebreakerPins& y) {
     for (int a = 0; a < kBoardAxes; ++a)
-      if (x.enc_a[a] != y.enc_a[a] || x.enc_b[a] != y.enc_b[a] || x.enc_z[a] != y.enc_z[a] ||
-          x.lim[a] != y.lim[a])
-        return false;
-    return x.rx == y.rx && x.btn_n == y.btn_n && x.estop == y.estop && x.hw_a == y.hw_a && x.hw_b == y.hw_b;
+      if (x.enc_a[a] != y.enc_a[a] || x.enc_b[a] != y.enc_b[a] || x.lim[a] != y.lim[a]) return false;
+    return x.rx == y.rx && x.btn_n == y.btn_n && x.estop == y.estop && x.probe == y.probe &&
+           x.hw_a == y.hw_a && x.hw_b == y.hw_b;
   }
   void write_all(const IcebreakerPins& p) {
     Vmotioncore_icebreaker& t = *top_;
     t.RX = p.rx;
     t.BTN_N = p.btn_n;
     t.ESTOP = p.estop;
+    t.PROBE = p.probe;
     t.HW_A = p.hw_a;
     t.HW_B = p.hw_b;
     for (int a = 0; a < kBoardAxes; ++a) {
       *enc_[a].a = p.enc_a[a];
       *enc_[a].b = p.enc_b[a];
-      *enc_[a].z = p.enc_z[a];
       *enc_[a].lim = p.lim[a];
     }
   }

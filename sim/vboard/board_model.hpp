@@ -24,13 +24,13 @@ class BoardModel {
   virtual ~BoardModel() = default;
   // At least one and at most `limit` clocks with the pins p held: one
   // stepped clock, or a stretch in which nothing but counters change (TX,
-  // EN and DIR hold). drive[a] gains, per clock, +1 (-1 with DIR) after
-  // each edge that leaves axis a's bridge on (EN and PWM high). Returns the
-  // clocks done.
+  // DRV_EN and DIR hold). drive[a] gains, per clock, +1 (-1 with DIR) after
+  // each edge that leaves axis a's bridge on (DRV_EN and PWM high). Returns
+  // the clocks done.
   virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive) = 0;
   // The output pins after the last edge.
   virtual bool tx() const = 0;
-  virtual bool en(int axis) const = 0;
+  virtual bool drv_en() const = 0;  // DRV_EN: every driver's enable
   // The twin's fast-forward over many plant steps (the RTL: none): how many
   // of the next clocks (up to limit) with the pins held change nothing but
   // counters; the drive of axis a over the clocks [from, from + n) of such a

@@ -83,7 +83,6 @@ struct VirtualBoard::Impl {
       const QuadPins q = quadrature_pins(s.shown, s.plant ? s.cpr : 1 << 30);
       pins.enc_a[a] = q.a;
       pins.enc_b[a] = q.b;
-      pins.enc_z[a] = s.plant ? q.z : false;
     }
   }
 
@@ -123,7 +122,6 @@ struct VirtualBoard::Impl {
             const QuadPins q = quadrature_pins(s.emit_from + (s.emit_n < 0 ? -n : n), s.cpr);
             pins.enc_a[a] = q.a;
             pins.enc_b[a] = q.b;
-            pins.enc_z[a] = q.z;
           }
         }
         const uint32_t next = (c | 1) + 1;  // the next even clock
@@ -231,7 +229,7 @@ bool VirtualBoard::dormant() const {
   if (link_quiet_clocks() <= kMaxWatchdogClocks) return false;
   for (int a = 0; a < kBoardAxes; ++a) {
     const auto& s = impl_->slot[a];
-    if (impl_->board->en(a) || (s.plant && !s.plant->stuck())) return false;
+    if (impl_->board->drv_en() || (s.plant && !s.plant->stuck())) return false;
   }
   return true;
 }
@@ -239,8 +237,8 @@ double VirtualBoard::position_m(int axis) const {
   const auto& s = impl_->slot[axis];
   return s.plant ? s.plant->position_m() : 0;
 }
-bool VirtualBoard::drive_enabled(int axis) const {
-  return impl_->board->en(axis);
+bool VirtualBoard::drive_enabled(int /*axis*/) const {
+  return impl_->board->drv_en();  // one DRV_EN pin for every driver
 }
 int VirtualBoard::configured_axes() const {
   return impl_->naxes;

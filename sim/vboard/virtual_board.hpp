@@ -10,9 +10,10 @@
 //   b.run(clocks, out);             // whole plant steps; the board's TX bytes appended to out
 //
 // Pins: each plant step (MachineConfig::plant_dt_s, a whole number of clocks)
-// the plant sees the mean of its PWM/DIR/EN pins over the step as terminal
-// volts (+-supply while EN and PWM are high), and its encoder count is shown
-// on the A/B/Z pins one edge every other clock, as the co-simulation does.
+// the plant sees the mean of its PWM/DIR pins and the shared DRV_EN over
+// the step as terminal volts (+-supply while DRV_EN and PWM are high), and
+// its encoder count is shown on the A/B pins one edge every other clock, as
+// the co-simulation does.
 // An axis the config does not describe keeps its encoder still; the limit,
 // e-stop and handwheel inputs stay inactive.
 #pragma once
