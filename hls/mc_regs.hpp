@@ -106,6 +106,7 @@ class McRegs {
     bool rv = false;
     uint8_t last_seq = 0;
     bool last_valid = false, last_full = false;
+    bool seg_full = false;  // a segment frame's room check, decided as the frame is taken
     bool rep_pend = false, rep_sending = false, tlm_pend = false, tlm_sending = false;
     bool val_shadow = false, val_direct = false;
     uint8_t set_n = 0;               // 2 bits
@@ -201,7 +202,7 @@ class McRegs {
     const int a_ax = addr >> 4 & 3;
     const bool rep_busy = o.rep_pend || o.rep_sending;
     const bool dup = o.last_valid && o.f_seq == o.last_seq;
-    const uint8_t chk = check(in, dup);
+    const uint8_t chk = check(dup);
     const uint8_t filt = filt_len(data);
     const bool apply = o.xs == X_APPLY;
     const bool w_glb = apply && is_glb;
@@ -347,6 +348,7 @@ class McRegs {
             n.f_seq = in.seq;
             n.f_cmd = in.cmd;
             n.f_len = in.len;
+            n.seg_full = (uint32_t(in.len) >> 2) + (in.seg_count & (2 * DEPTH - 1)) > DEPTH;
             n.xs = X_CHECK;
           }
           break;
@@ -701,7 +703,7 @@ class McRegs {
   }
 
   // The checks of a frame that need no payload.
-  uint8_t check(const In& in, bool dup) const {
+  uint8_t check(bool dup) const {
     namespace bp = board::proto;
     switch (r.f_cmd) {
       case bp::CMD_PING:
@@ -714,8 +716,7 @@ class McRegs {
         const bool len_ok = r.f_len != 0 && r.f_len % bp::SEG_BYTES == 0 && r.f_len <= bp::MAX_LEN;
         if (!len_ok) return bp::ST_BAD_LEN;
         if (dup) return r.last_full ? bp::ST_FULL : bp::ST_DUP;
-        const uint32_t room_need = (uint32_t(r.f_len) >> 2) + (in.seg_count & (2 * DEPTH - 1));
-        return room_need > DEPTH ? bp::ST_FULL : bp::ST_OK;
+        return r.seg_full ? bp::ST_FULL : bp::ST_OK;
       }
       default:
         return bp::ST_BAD_CMD;

@@ -321,7 +321,13 @@ module mc_regs #(
   reg  [1:0] set_n;  // X_SET: the axis whose position is read next
   wire       rep_busy = rep_pend | rep_sending;
   wire       dup = last_valid && f_seq == last_seq;
-  wire [FIFO_AW+1:0] room_need = {{(FIFO_AW - 4) {1'b0}}, f_len[7:2]} + {1'b0, seg_count_i};
+  // A segment frame's room check is decided as the frame is taken (from the
+  // link's length and the queue's count in that clock), not in X_CHECK: the
+  // adder and compare in front of the executor's decisions were the board's
+  // longest path. The queue only drains in between, so a frame refused FULL
+  // here would at most have fitted by the segment finished in that clock.
+  wire [FIFO_AW+1:0] room_need = {{(FIFO_AW - 4) {1'b0}}, len_i[7:2]} + {1'b0, seg_count_i};
+  reg                seg_full;
   wire       seg_len_ok = f_len == 8'd40 || f_len == 8'd80 || f_len == 8'd120 || f_len == 8'd160 ||
                           f_len == 8'd200 || f_len == 8'd240;
 
@@ -363,7 +369,7 @@ module mc_regs #(
       P_CMD_SEG:
       if (!seg_len_ok) chk = P_ST_BAD_LEN;
       else if (dup) chk = last_full ? P_ST_FULL : P_ST_DUP;
-      else if (room_need > DEPTH) chk = P_ST_FULL;
+      else if (seg_full) chk = P_ST_FULL;
       default:     chk = P_ST_BAD_CMD;
     endcase
   end
@@ -522,8 +528,9 @@ module mc_regs #(
         if (frame_i && !rep_busy) begin
           f_seq <= seq_i;
           f_cmd <= cmd_i;
-          f_len <= len_i;
-          xs    <= X_CHECK;
+          f_len    <= len_i;
+          seg_full <= room_need > DEPTH;
+          xs       <= X_CHECK;
         end
         X_CHECK: begin
           status     <= chk;

@@ -72,6 +72,9 @@ target_link_libraries(test_motion_core_twin PRIVATE mc_hls mc_cosim)
 # (The Verilated top, vboard, is the virtual board's too: sim/CMakeLists.txt.)
 mc_gtest(test_board_rtl rtl test_board_rtl.cpp)
 target_link_libraries(test_board_rtl PRIVATE mc_hls mc_motion vboard)
+# The board's machine I/O through its pins: handwheel jog, probe latch and stop.
+mc_gtest(test_board_io_rtl rtl test_board_io_rtl.cpp)
+target_link_libraries(test_board_io_rtl PRIVATE mc_hls mc_motion vboard)
 # Hostile bytes on the board's RX pin: no bad frame changes a register
 # (fuzz/board_rx.hpp) and on the board twin (fuzz/board_rx_twin.hpp); the
 # fuzz_board_rx* targets run the same checks under libFuzzer.

@@ -39,3 +39,8 @@ endforeach()
 mc_gtest(test_link_soak system TIMEOUT 600 test_link_soak.cpp)
 target_link_libraries(test_link_soak PRIVATE mc_motion mc_vboard)
 target_compile_definitions(test_link_soak PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+
+# Stepper axes on the virtual board: steps against the command, pull-out.
+mc_gtest(test_vboard_stepper system test_vboard_stepper.cpp)
+target_link_libraries(test_vboard_stepper PRIVATE mc_motion mc_vboard)
+target_compile_definitions(test_vboard_stepper PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

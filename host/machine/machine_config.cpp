@@ -264,6 +264,16 @@ PidConfig read_pid(Reader r, double clock_hz) {
   return p;
 }
 
+StepperConfig read_stepper(Reader r) {
+  StepperConfig s;
+  s.rotor_teeth = r.integer("rotor_teeth", 1, 1000, "rotor teeth: 50 for 200 full steps per rev");
+  s.microsteps = r.integer("microsteps", 1, 256, "STEP pulses per full step");
+  s.current_a = r.number("current_a", Range::positive, "A", 100, "a stepper driver's phase current");
+  s.detent_nm = r.number("detent_nm", Range::non_negative, "N*m", 100, "a stepper's cogging torque");
+  r.finish();
+  return s;
+}
+
 AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   AxisConfig a{};
   a.name = name;
@@ -303,6 +313,13 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   a.motor = read_motor(r.table("motor"));
   a.drive = read_drive(r.table("drive"), clock_hz);
   a.pid = read_pid(r.table("pid"), clock_hz);
+  if (r.has("stepper")) {
+    a.stepper = read_stepper(r.table("stepper"));
+    if (a.encoder_cpr != a.stepper->steps_per_rev())
+      throw r.error("encoder_counts_per_rev", std::to_string(a.encoder_cpr),
+                    std::to_string(a.stepper->steps_per_rev()) +
+                        " on a stepper axis: one count per STEP pulse, 4 * rotor_teeth * microsteps");
+  }
   r.finish();
   return a;
 }

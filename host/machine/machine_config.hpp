@@ -42,6 +42,20 @@ struct DriveConfig {
   double amp_gain;     // V at the motor per V from the DAC
 };
 
+// [axis.N.stepper], optional: the axis is a two-phase hybrid stepper behind
+// a microstep driver on the board's STEP/DIR pins (sim/plant/stepper_motor.hpp;
+// [axis.N.motor] then gives one phase's R, L, the torque per ampere, the
+// rotor's inertia and the frictions). One STEP pulse is one count, so the
+// axis's encoder_counts_per_rev is 4 * rotor_teeth * microsteps; a
+// closed-loop axis's shaft encoder counts in the same units.
+struct StepperConfig {
+  int rotor_teeth = 50;     // 200 full steps per revolution
+  int microsteps = 16;      // steps of the STEP input per full step
+  double current_a = 1.5;   // the driver's phase current setting (peak)
+  double detent_nm = 0.01;  // unpowered cogging torque
+  int steps_per_rev() const { return 4 * rotor_teeth * microsteps; }
+};
+
 // In core units (host/pid_design.hpp): drive units (+-32767) per encoder count.
 struct PidConfig {
   double kp, ki, kd, tf_s, ts_s, ff1 = 0, ff2 = 0;
@@ -67,6 +81,7 @@ struct AxisConfig {
   // targets beyond them before anything moves.
   double travel_min_m = -1.0;
   double travel_max_m = 1.0;
+  std::optional<StepperConfig> stepper;  // a stepper axis (else a DC servo on the H-bridge pins)
 };
 
 // [planner], optional (docs/gcode.md, "Planner"). Defaults as Grbl's.

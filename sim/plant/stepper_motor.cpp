@@ -29,6 +29,7 @@ StepperPlant::StepperPlant(const AxisConfig& axis, const StepperParams& stepper,
   tau_load_ = machine::reflected_torque_nm(axis);
   a_ = std::exp(-m_.r_ohm / m_.l_h * dt_s);
   supply_ = axis.drive.supply_v;
+  rad_to_m_ = axis.lead_m_per_rev / (2 * kPi * axis.gear_ratio);
 }
 
 void StepperPlant::reset(double position_rad) {

@@ -35,13 +35,9 @@ namespace mc::sim {
 // What a stepper adds to the motor parameters (MotorParams): there r_ohm,
 // l_h are one phase's, kt_nm_per_a the torque per ampere of phase current
 // (holding torque / rated current), j_kg_m2 the rotor's inertia; b, coulomb
-// and stiction the same frictions as a servo axis's.
-struct StepperParams {
-  int rotor_teeth = 50;     // 200 full steps per revolution
-  int microsteps = 16;      // steps of the STEP input per full step
-  double current_a = 1.5;   // the driver's phase current setting (peak)
-  double detent_nm = 0.01;  // unpowered cogging torque
-};
+// and stiction the same frictions as a servo axis's. A machine file's
+// [axis.N.stepper] table.
+using StepperParams = machine::StepperConfig;
 
 class StepperPlant {
  public:
@@ -54,6 +50,9 @@ class StepperPlant {
 
   double time_s() const { return double(n_) * dt_; }
   double position_rad() const { return theta_; }
+  double speed_rad_s() const { return w_; }
+  // Table: position_rad / (2 pi) / gear_ratio * lead, as a servo axis's.
+  double position_m() const { return theta_ * rad_to_m_; }
   double current_a(int phase) const { return phase == 0 ? ia_ : ib_; }
   // Full steps the rotor has slipped behind (positive) or ahead of the
   // command: the whole electrical periods between them, times four. A
@@ -72,7 +71,7 @@ class StepperPlant {
  private:
   MotorParams m_;
   StepperParams s_;
-  double dt_, j_, tau_load_, supply_;
+  double dt_, j_, tau_load_, supply_, rad_to_m_;
   double a_;  // exp(-R dt / L): one phase's current decay over a step
   double ia_ = 0, ib_ = 0, w_ = 0, theta_ = 0;
   int64_t n_ = 0;

@@ -33,6 +33,8 @@ class TwinBoard final : public BoardModel {
   }
   bool tx() const override { return b_.tx(); }
   bool drv_en() const override { return b_.drv_en(); }
+  bool pwm(int a) const override { return b_.pwm(a); }
+  bool dir(int a) const override { return b_.dir(a); }
   uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) override { return b_.idle_clocks(p, limit); }
   int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
     if (!b_.drv_en()) return 0;
@@ -91,6 +93,8 @@ class RtlBoard final : public BoardModel {
   }
   bool tx() const override { return top_->TX; }
   bool drv_en() const override { return top_->DRV_EN; }
+  bool pwm(int a) const override { return *drv_[a].pwm; }
+  bool dir(int a) const override { return *drv_[a].dir; }
 
  private:
   struct EncPorts {

@@ -31,6 +31,9 @@ class BoardModel {
   // The output pins after the last edge.
   virtual bool tx() const = 0;
   virtual bool drv_en() const = 0;  // DRV_EN: every driver's enable
+  // An axis's PWM (STEP on a stepper axis) and DIR pins.
+  virtual bool pwm(int axis) const = 0;
+  virtual bool dir(int axis) const = 0;
   // The twin's fast-forward over many plant steps (the RTL: none): how many
   // of the next clocks (up to limit) with the pins held change nothing but
   // counters; the drive of axis a over the clocks [from, from + n) of such a

@@ -16,6 +16,7 @@
 
 #include "host/base/errors.hpp"
 #include "sim/plant/dc_motor.hpp"
+#include "sim/plant/stepper_motor.hpp"
 #include "sim/vboard/board_model.hpp"
 #include "sim/vboard/uart_model.hpp"
 
@@ -51,12 +52,32 @@ BoardEngine parse_board_engine(const std::string& name, const std::string& what)
 }
 
 struct VirtualBoard::Impl {
-  // One axis slot of the board: its plant, when configured.
+  // One axis slot of the board: its plant, when configured: a DC servo on
+  // the H-bridge pins, or a stepper whose driver counts the STEP pulses.
   struct Slot {
     std::unique_ptr<AxisPlant> plant;
+    std::unique_ptr<StepperPlant> stepper;
     int cpr = 0;
     double supply_v = 0;
     int64_t shown = 0, emit_from = 0, emit_n = 0;  // encoder edges of the current step
+    int64_t steps = 0;                             // the stepper driver's STEP count
+    bool step_pin = false;                         // STEP after the last clock
+    bool present() const { return plant || stepper; }
+    int64_t encoder_count() const { return plant ? plant->encoder_count() : stepper->position_steps(); }
+    bool still() const { return plant ? plant->stuck() : stepper->speed_rad_s() == 0; }
+    double position_m() const { return plant ? plant->position_m() : stepper ? stepper->position_m() : 0; }
+    // A STEP edge in the clocks just run (the pins held through a stretch
+    // of more than one: a stepping generator is never skipped over).
+    void watch_step(bool step, bool dir) {
+      if (step && !step_pin) steps += dir ? 1 : -1;
+      step_pin = step;
+    }
+    void plant_step(int32_t drive, uint32_t clocks, bool enabled) {
+      if (plant)
+        plant->step(supply_v * double(drive) / double(clocks));
+      else
+        stepper->step(steps, enabled);
+    }
   };
 
   Impl(const MachineConfig& cfg, uint32_t seed, BoardEngine e)
@@ -72,15 +93,18 @@ struct VirtualBoard::Impl {
     board = make_board_model(e, seed);
     for (size_t a = 0; a < m.axes.size(); ++a) {
       Slot& s = slot[a];
-      s.plant = std::make_unique<AxisPlant>(m.axes[a], m.plant_dt_s);
+      if (m.axes[a].stepper)
+        s.stepper = std::make_unique<StepperPlant>(m.axes[a], *m.axes[a].stepper, m.plant_dt_s);
+      else
+        s.plant = std::make_unique<AxisPlant>(m.axes[a], m.plant_dt_s);
       s.cpr = m.axes[a].encoder_cpr;
       s.supply_v = m.axes[a].drive.supply_v;
-      s.shown = s.plant->encoder_count();
+      s.shown = s.encoder_count();
       ++naxes;
     }
     for (int a = 0; a < kBoardAxes; ++a) {
       const Slot& s = slot[a];
-      const QuadPins q = quadrature_pins(s.shown, s.plant ? s.cpr : 1 << 30);
+      const QuadPins q = quadrature_pins(s.shown, s.present() ? s.cpr : 1 << 30);
       pins.enc_a[a] = q.a;
       pins.enc_b[a] = q.b;
     }
@@ -91,8 +115,7 @@ struct VirtualBoard::Impl {
   void plan_edges() {
     for (int a = 0; a < naxes; ++a) {
       Slot& s = slot[a];
-      const int64_t d =
-          std::clamp<int64_t>(s.plant->encoder_count() - s.shown, -int64_t(k / 2), int64_t(k / 2));
+      const int64_t d = std::clamp<int64_t>(s.encoder_count() - s.shown, -int64_t(k / 2), int64_t(k / 2));
       s.emit_from = s.shown;
       s.emit_n = d;
       s.shown += d;
@@ -131,16 +154,16 @@ struct VirtualBoard::Impl {
       const uint32_t steady = tx.steady();
       if (steady < hold) hold = steady + 1;
       const uint32_t n = board->run(pins, hold, drive);
+      for (int a = 0; a < naxes; ++a)
+        if (slot[a].stepper) slot[a].watch_step(board->pwm(a), board->dir(a));
       rx.clock_n(board->tx(), n);
       tx.clock_n(n);
       c += n;
     }
     active = active || !tx.idle() || rx.busy() || rx.has_byte();
     while (rx.has_byte()) out.push_back(rx.take());
-    for (int a = 0; a < naxes; ++a) {
-      Slot& s = slot[a];
-      s.plant->step(s.supply_v * double(drive[a]) / double(k));
-    }
+    const bool enabled = board->drv_en();
+    for (int a = 0; a < naxes; ++a) slot[a].plant_step(drive[a], k, enabled);
     cycles += k;
     if (active) last_activity = cycles;
   }
@@ -156,17 +179,18 @@ struct VirtualBoard::Impl {
   bool jump(uint64_t steps) {
     if (!tx.idle() || rx.busy() || rx.has_byte()) return false;
     for (int a = 0; a < naxes; ++a)
-      if (slot[a].plant->encoder_count() != slot[a].shown) return false;
+      if (slot[a].encoder_count() != slot[a].shown) return false;
     pins.rx = tx.pin();
     const uint64_t most = board->idle_clocks(pins, uint32_t(std::min<uint64_t>(steps * k, 1u << 30))) / k;
     if (most == 0) return false;
     uint64_t j = 0;
     bool edge = false;
+    const bool enabled = board->drv_en();
     while (j < most && !edge) {
       for (int a = 0; a < naxes; ++a) {
         Slot& s = slot[a];
-        s.plant->step(s.supply_v * double(board->idle_drive(a, uint32_t(j * k), k)) / double(k));
-        edge = edge || s.plant->encoder_count() != s.shown;
+        s.plant_step(s.plant ? board->idle_drive(a, uint32_t(j * k), k) : 0, k, enabled);
+        edge = edge || s.encoder_count() != s.shown;
       }
       ++j;
     }
@@ -229,16 +253,22 @@ bool VirtualBoard::dormant() const {
   if (link_quiet_clocks() <= kMaxWatchdogClocks) return false;
   for (int a = 0; a < kBoardAxes; ++a) {
     const auto& s = impl_->slot[a];
-    if (impl_->board->drv_en() || (s.plant && !s.plant->stuck())) return false;
+    if (impl_->board->drv_en() || (s.present() && !s.still())) return false;
   }
   return true;
 }
 double VirtualBoard::position_m(int axis) const {
-  const auto& s = impl_->slot[axis];
-  return s.plant ? s.plant->position_m() : 0;
+  return impl_->slot[axis].position_m();
 }
 bool VirtualBoard::drive_enabled(int /*axis*/) const {
   return impl_->board->drv_en();  // one DRV_EN pin for every driver
+}
+int64_t VirtualBoard::driver_steps(int axis) const {
+  return impl_->slot[axis].steps;
+}
+int64_t VirtualBoard::lost_full_steps(int axis) const {
+  const auto& s = impl_->slot[axis];
+  return s.stepper ? s.stepper->lost_full_steps(s.steps) : 0;
 }
 int VirtualBoard::configured_axes() const {
   return impl_->naxes;

@@ -13,7 +13,9 @@
 // the plant sees the mean of its PWM/DIR pins and the shared DRV_EN over
 // the step as terminal volts (+-supply while DRV_EN and PWM are high), and
 // its encoder count is shown on the A/B pins one edge every other clock, as
-// the co-simulation does.
+// the co-simulation does. A stepper axis ([axis.N.stepper]) has a driver
+// on its STEP/DIR pins instead: each rising STEP edge is a step in DIR's
+// direction, and the shaft's encoder shows the rotor in step units.
 // An axis the config does not describe keeps its encoder still; the limit,
 // e-stop and handwheel inputs stay inactive.
 #pragma once
@@ -80,6 +82,11 @@ class VirtualBoard {
   double position_m(int axis) const;
   bool drive_enabled(int axis) const;
   int configured_axes() const;
+  // A stepper axis: the STEP pulses its driver counted (DIR high: +1), and
+  // the full steps the rotor has slipped behind them (0 when it kept up;
+  // StepperPlant::lost_full_steps). 0 on a servo axis.
+  int64_t driver_steps(int axis) const;
+  int64_t lost_full_steps(int axis) const;
   // For link checks: appends to *words every 32-bit word the board writes
   // into its segment queue, in order, as it writes it (10 per segment,
   // hls/interp_seg.hpp); nullptr stops. Both engines.
