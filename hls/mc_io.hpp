@@ -121,10 +121,9 @@ class McIo {
     }
 
     // Handwheel jog.
-    const uint8_t hd = uint8_t(in.hw_pos - o.ref_pos);
-    const uint8_t det = o.m_det1 ? 1 : 4;
-    const bool det_up = !(hd & 0x80) && hd >= det;
-    const bool det_dn = (hd & 0x80) && uint8_t(0 - hd) >= det;
+    const uint8_t det = detent_len(o);
+    const Detent dt = detent(o, in.hw_pos);
+    const bool det_up = dt == Detent::Up, det_dn = dt == Detent::Down;
     const uint16_t inc = o.m_step < 3 ? uint16_t(bb::MPG_STEPS[o.m_step]) : o.m_inc;
     const bool neg = o.pend >> 15 & 1;
     const bool room = neg == (o.pend >> 14 & 1) || det_dn != neg;
@@ -206,8 +205,7 @@ class McIo {
     if (!r.m_on) {
       if (in.hw_pos != r.ref_pos || r.pend != 0) return false;
     } else {
-      const uint8_t hd = uint8_t(in.hw_pos - r.ref_pos), det = r.m_det1 ? 1 : 4;
-      if ((!(hd & 0x80) && hd >= det) || ((hd & 0x80) && uint8_t(0 - hd) >= det)) return false;
+      if (detent(r, in.hw_pos) != Detent::None) return false;
       if (r.pend != 0 && in.armed && in.ip_idle) return false;
     }
     const bool on = in.armed && r.sp_on;
@@ -226,6 +224,17 @@ class McIo {
   }
 
  private:
+  // A whole detent of the handwheel since ref_pos, either way (hw_pos's low
+  // bits, a signed 8-bit difference): four counts, or one with MPG.detent1.
+  enum class Detent { None, Up, Down };
+  static uint8_t detent_len(const R& o) { return o.m_det1 ? 1 : 4; }
+  static Detent detent(const R& o, uint8_t hw_pos) {
+    const uint8_t hd = uint8_t(hw_pos - o.ref_pos), det = detent_len(o);
+    if (!(hd & 0x80) && hd >= det) return Detent::Up;
+    if ((hd & 0x80) && uint8_t(0 - hd) >= det) return Detent::Down;
+    return Detent::None;
+  }
+
   // The switches as the filters see them: home switches, then the probe.
   static uint8_t sw_in(const R& o, const McIoIn& in) {
     return uint8_t(((in.lim ^ in.lim_inv) & AXES) | uint32_t(in.probe != o.probe_inv) << NAXES);

@@ -519,9 +519,8 @@ class Watcher {
     c.faults_seen |= b.u_safety.fault_o;
     for (int a = 0; a < 3; ++a) c.pwm_high += t.pwm(a);
     c.tx_low += !t.tx();
-    for (int a = 0; a < 3; ++a)
-      c.steps += b.u_step.stepper >> a & 1 && b.u_step.u_gen[a].st == Twin::Board::Step::Gen::ST_HIGH &&
-                 b.u_step.u_gen[a].tmr == 0;
+    for (int a = 0; a < 3; ++a)  // a STEP edge: the generator's pin rose at this edge
+      c.steps += (b.u_step.stepper >> a & 1) && b.u_step.u_gen[a].step_o && !b.u_step.step_q[a];
     c.jogs += b.u_io.r.jog_o != 0;
     c.latches += b.u_io.r.latch_o != 0;
     c.io_stops += b.u_io.r.stop_o;

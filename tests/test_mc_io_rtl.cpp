@@ -157,38 +157,45 @@ TEST(McIoRtl, AProbeEdgeLatchesEveryAxisInOneClockAndStops) {
   EXPECT_EQ(latched_at, 3);
 }
 
-// The figure: 100 detents at x10 move the selected axis 1000 counts
-// (jog strobes for that axis only, in the detents' direction), then back.
-TEST(McIoRtl, HundredDetentsAtTimesTenMoveExactlyAThousandCounts) {
-  Pair p(9);
+// Out of reset, the drives armed and the interpolator idle.
+McIoIn armed_and_idle(Pair& p) {
   McIoIn in;
   in.rst = true;
   p.clock(in);
   in.rst = false;
   in.armed = true;
   in.ip_idle = true;
+  return in;
+}
+
+// The figure: 100 detents at x10 move the selected axis 1000 counts
+// (jog strobes for that axis only, in the detents' direction), then back.
+TEST(McIoRtl, HundredDetentsAtTimesTenMoveExactlyAThousandCounts) {
+  Pair p(9);
+  McIoIn in = armed_and_idle(p);
   const uint32_t mpg = 1u << bb::M_ON | 1u << bb::M_AXIS_LSB | 1u << bb::M_STEP_LSB | 3u << bb::M_RATE_LSB;
   p.clock(write(in, br::MPG, mpg));
   for (int dir : {1, -1}) {
     long moved = 0, other = 0;
     // The handwheel turns faster than the axis moves: counts pile up.
+    // One clock, counting the jog strobes: Y's signed, any other axis's.
+    const auto clock = [&] {
+      p.clock(in);
+      const int sign = p.twin.r.jog_neg_o ? -1 : 1;
+      moved += (p.twin.r.jog_o >> 1 & 1) * sign;
+      other += (p.twin.r.jog_o & 0b101) != 0;
+    };
     for (int d = 0; d < 100; ++d)
       for (int c = 0; c < 4; ++c) {
         in.hw_pos = uint8_t(in.hw_pos + dir);
         for (int k = 0; k < 5; ++k) {
-          p.clock(in);
+          clock();
           if (HasFatalFailure()) return;
-          const int sign = p.twin.r.jog_neg_o ? -1 : 1;
-          moved += (p.twin.r.jog_o >> 1 & 1) * sign;
-          other += (p.twin.r.jog_o & 0b101) != 0;
         }
       }
     for (int k = 0; k < 1000 * 48 + 100; ++k) {
-      p.clock(in);
+      clock();
       if (HasFatalFailure()) return;
-      const int sign = p.twin.r.jog_neg_o ? -1 : 1;
-      moved += (p.twin.r.jog_o >> 1 & 1) * sign;
-      other += (p.twin.r.jog_o & 0b101) != 0;
     }
     EXPECT_EQ(moved, 1000 * dir);
     EXPECT_EQ(other, 0);
@@ -199,12 +206,7 @@ TEST(McIoRtl, HundredDetentsAtTimesTenMoveExactlyAThousandCounts) {
 // Spindle, coolant and the jog stop the clock after the drives are disarmed.
 TEST(McIoRtl, DisarmingStopsTheSpindleCoolantAndJog) {
   Pair p(11);
-  McIoIn in;
-  in.rst = true;
-  p.clock(in);
-  in.rst = false;
-  in.armed = true;
-  in.ip_idle = true;
+  McIoIn in = armed_and_idle(p);
   p.clock(write(in, br::IO_CTRL,
                 1u << bb::IO_SPINDLE | 1u << bb::IO_FLOOD | 1u << bb::IO_MIST | 1023u << bb::IO_DUTY_LSB));
   p.clock(write(in, br::MPG, 1u << bb::M_ON | 2u << bb::M_STEP_LSB));
