@@ -82,19 +82,27 @@ regs: deps configure
 	  "<!-- end of generated table -->" $(BUILD)/gen_board_regs --md
 
 # Bitstream and utilization/timing summary: build/synth/ (scripts/synth.sh).
+# The servo board: three PID loops on H-bridges. synth-stepper: the stepper
+# board, a step generator on every axis and no loops (build/synth-stepper/).
+# The UP5K holds one or the other, not both (docs/board.md).
 synth: deps
 	scripts/synth.sh $(BUILD)/synth
+
+synth-stepper: deps
+	STEPPERS=7 SERVO=0 scripts/synth.sh $(BUILD)/synth-stepper
 
 # Program the iCEBreaker (board on USB; docs/bringup.md). prog loads the
 # bitstream into the FPGA's configuration SRAM (iceprog -S): it runs at once
 # and is gone at the next power cycle, the safe way to try a build. flash
 # writes it to the board's SPI flash (iceprog without -S), which the FPGA
-# loads at every power-up.
-prog: $(BUILD)/synth/motioncore_icebreaker.bin
+# loads at every power-up. SYNTH_DIR=build/synth-stepper programs the
+# stepper board.
+SYNTH_DIR ?= $(BUILD)/synth
+prog: $(SYNTH_DIR)/motioncore_icebreaker.bin
 	iceprog -S $<
 
-flash: $(BUILD)/synth/motioncore_icebreaker.bin
+flash: $(SYNTH_DIR)/motioncore_icebreaker.bin
 	iceprog $<
 
-$(BUILD)/synth/motioncore_icebreaker.bin:
-	@echo "no bitstream: run make synth first" >&2; exit 2
+$(SYNTH_DIR)/motioncore_icebreaker.bin:
+	@echo "no bitstream in $(SYNTH_DIR): run make synth (or make synth-stepper) first" >&2; exit 2

@@ -17,7 +17,8 @@ namespace mc::board {
 // ---- protocol constants -------------------------------------------------
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
-constexpr uint8_t VERSION = 4;  // 4: machine I/O; 3: POS, HW_POS read-only, 8-bit error counts
+constexpr uint8_t VERSION = 5;  // 5: INFO names the build (step generators, loops, handwheel); 4: machine I/O;
+                                // 3: POS, HW_POS read-only, 8-bit error counts
 constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
@@ -100,9 +101,12 @@ constexpr uint16_t axis(int a, uint16_t off) {
 namespace bits {
 constexpr uint32_t ID_MAGIC = 0x4D430000;  // "MC" in the high half, VERSION in the low
 // INFO
-constexpr int INFO_NAXES_LSB = 0;    // 4 bits
-constexpr int INFO_FIFO_AW_LSB = 4;  // 4 bits
-constexpr int INFO_VERSION_LSB = 8;  // 8 bits
+constexpr int INFO_NAXES_LSB = 0;      // 4 bits
+constexpr int INFO_FIFO_AW_LSB = 4;    // 4 bits
+constexpr int INFO_VERSION_LSB = 8;    // 8 bits
+constexpr int INFO_STEPPERS_LSB = 16;  // 3 bits: axes built with a step generator (bit a: axis a)
+constexpr int INFO_SERVO = 19;         // the PID loops are built (0: a stepper-only board)
+constexpr int INFO_HANDWHEEL = 20;     // the handwheel decoder is built
 // The INFO fields of a value read from the register.
 constexpr int info_naxes(uint32_t info) {
   return int(info >> INFO_NAXES_LSB & 0xFu);
@@ -112,6 +116,21 @@ constexpr int info_fifo_aw(uint32_t info) {
 }
 constexpr int info_version(uint32_t info) {
   return int(info >> INFO_VERSION_LSB & 0xFFu);
+}
+constexpr int info_steppers(uint32_t info) {
+  return int(info >> INFO_STEPPERS_LSB & 0x7u);
+}
+constexpr bool info_servo(uint32_t info) {
+  return (info >> INFO_SERVO & 1u) != 0;
+}
+constexpr bool info_handwheel(uint32_t info) {
+  return (info >> INFO_HANDWHEEL & 1u) != 0;
+}
+// INFO as a board built with these parameters reads it.
+constexpr uint32_t info_word(int naxes, int fifo_aw, int version, int steppers, bool servo, bool handwheel) {
+  return uint32_t(naxes) << INFO_NAXES_LSB | uint32_t(fifo_aw) << INFO_FIFO_AW_LSB |
+         uint32_t(version) << INFO_VERSION_LSB | uint32_t(steppers & 7) << INFO_STEPPERS_LSB |
+         uint32_t(servo) << INFO_SERVO | uint32_t(handwheel) << INFO_HANDWHEEL;
 }
 // STATUS (live)
 constexpr int ST_ARMED = 0;
@@ -185,9 +204,9 @@ constexpr int L_PROBE_INV = 8;  // the probe input is active low
 constexpr int L_STOP = 9;       // a latch also stops the interpolator and flushes its queue
 // MPG: handwheel jog
 constexpr int M_ON = 0;
-constexpr int M_AXIS_LSB = 1;  // 2 bits
-constexpr int M_STEP_LSB = 3;  // 2 bits: counts per detent 1, 10, 100, MPG_INC
-constexpr int M_DETENT1 = 5;   // a detent is one count (else four: one quadrature cycle)
+constexpr int M_AXIS_LSB = 1;   // 2 bits
+constexpr int M_STEP_LSB = 3;   // 2 bits: counts per detent 1, 10, 100, MPG_INC
+constexpr int M_DETENT1 = 5;    // a detent is one count (else four: one quadrature cycle)
 constexpr int M_RATE_LSB = 16;  // 8 bits: 16-clock units per count moved (below 2: 2)
 constexpr int MPG_MIN_RATE = 2;
 constexpr int MPG_INC_BITS = 12;
@@ -230,7 +249,9 @@ struct RegDef {
 
 constexpr std::array<RegDef, 38> REGS = {{
     {"ID", reg::ID, false, Access::R, "0x4D43 (\"MC\") << 16 | protocol version"},
-    {"INFO", reg::INFO, false, Access::R, "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version"},
+    {"INFO", reg::INFO, false, Access::R,
+     "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version, [18:16] axes with a step generator, [19] PID "
+     "loops built, [20] handwheel built"},
     {"CLK_HZ", reg::CLK_HZ, false, Access::R, "clock frequency, Hz"},
     {"BAUD", reg::BAUD, false, Access::R, "UART rate, bit/s"},
     {"STATUS", reg::STATUS, false, Access::R,

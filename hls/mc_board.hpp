@@ -39,11 +39,11 @@ struct McBoardIn {
 };
 
 template <int NAXES = 3, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 4, int CLK_HZ = 12'000'000,
-          int BAUD = 1'000'000, bool HANDWHEEL = true, int STEPPERS = 0>
+          int BAUD = 1'000'000, bool HANDWHEEL = true, int STEPPERS = 0, bool SERVO = true>
 class McBoard {
  public:
-  using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true>;  // IDX_RAM: as the board builds it
-  using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD>;
+  using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true, SERVO>;  // IDX_RAM: as the board builds it
+  using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD, STEPPERS, SERVO, HANDWHEEL>;
   using Safety = McSafety<NAXES>;
   using Io = McIo<NAXES>;
   using Step = McStep<NAXES, STEPPERS>;

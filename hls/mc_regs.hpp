@@ -53,7 +53,8 @@ struct McRegsIn {
   uint32_t io_stat = 0;
 };
 
-template <int NAXES = 3, int FIFO_AW = 9, int FILT_W = 8, int CLK_HZ = 12'000'000, int BAUD = 1'000'000>
+template <int NAXES = 3, int FIFO_AW = 9, int FILT_W = 8, int CLK_HZ = 12'000'000, int BAUD = 1'000'000,
+          int STEPPERS = 0, bool SERVO = true, bool HANDWHEEL = true>
 class McRegs {
   static_assert(NAXES >= 1 && NAXES <= 3, "mc_regs: NAXES must be 1..3");
   static_assert(FIFO_AW >= 6 && FIFO_AW <= 12, "mc_regs: FIFO_AW must be 6..12 (a frame of segments fits)");
@@ -148,9 +149,8 @@ class McRegs {
     shadow[sidx(br::WDOG)] = WDOG_RESET;
     shadow[sidx(br::SAFETY)] = bb::SAFETY_DEFAULT;
     shadow[sidx(br::ID)] = bb::ID_MAGIC | board::proto::VERSION;
-    shadow[sidx(br::INFO)] = uint32_t(board::proto::VERSION) << bb::INFO_VERSION_LSB |
-                             uint32_t(FIFO_AW) << bb::INFO_FIFO_AW_LSB |
-                             uint32_t(NAXES) << bb::INFO_NAXES_LSB;
+    shadow[sidx(br::INFO)] =
+        bb::info_word(NAXES, FIFO_AW, board::proto::VERSION, STEPPERS & ((1 << NAXES) - 1), SERVO, HANDWHEEL);
     shadow[sidx(br::CLK_HZ)] = uint32_t(CLK_HZ);
     shadow[sidx(br::BAUD)] = uint32_t(BAUD);
   }

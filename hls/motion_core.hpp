@@ -78,7 +78,8 @@ constexpr int SMP_FIELDS = 8;  // per axis: the address has three field bits
 
 // IDX_RAM: the decoders' index latches in block RAM (rtl/quad_decoder.v), as
 // the board builds them.
-template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8, bool IDX_RAM = false>
+template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8, bool IDX_RAM = false,
+          bool SERVO = true>
 class MotionCore {
   static_assert(NAXES >= 1 && NAXES <= 3, "motion_core: NAXES must be 1..3");
   static_assert(PWM_BITS >= 1 && PWM_BITS <= 15, "motion_core: PWM_BITS must be 1..15");
@@ -87,7 +88,7 @@ class MotionCore {
   bool operator==(const MotionCore&) const = default;
   using In = MotionIn<NAXES>;
   using Out = MotionOut<NAXES>;
-  using Pid = PidCoreClocked<NAXES>;
+  using Pid = PidCoreClocked<NAXES, SERVO>;
   using Decoder = QuadDecoder<FILT_W, 8, 32, 16, IDX_RAM, false>;  // errors to 255, no load
   static constexpr int latency = Pid::latency;
   // The sweep clock (Pid::sweep_clock) in which pid_core streams axis a's

@@ -40,12 +40,12 @@ struct IcebreakerPins {
 };
 
 template <int NAXES = 3, int CLK_HZ = 12'000'000, int BAUD = 1'000'000, bool HANDWHEEL = true,
-          int STEPPERS = 0>
+          int STEPPERS = 0, bool SERVO = true>
 class MotioncoreIcebreaker {
   static_assert(NAXES >= 1 && NAXES <= 3, "motioncore_icebreaker: NAXES must be 1..3");
 
  public:
-  using Board = McBoard<NAXES, 9, 9, 4, CLK_HZ, BAUD, HANDWHEEL, STEPPERS>;
+  using Board = McBoard<NAXES, 9, 9, 4, CLK_HZ, BAUD, HANDWHEEL, STEPPERS, SERVO>;
   static constexpr int NS = 4 + NAXES;  // synchronized inputs: {RX, probe, button, e-stop, limits}
 
   uint8_t por = 0;         // power-on reset counter, 4 bits

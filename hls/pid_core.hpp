@@ -143,7 +143,9 @@ inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int
   return o;
 }
 
-template <int NAXES>
+// SERVO = false: rtl/pid_core.v built without its loops (a stepper board):
+// an enable write is ignored, so every axis runs as a disabled one.
+template <int NAXES, bool SERVO = true>
 class PidCore {
   static_assert(NAXES >= 1 && NAXES <= 15, "pid_core: NAXES must be 1..15");
 
@@ -172,7 +174,7 @@ class PidCore {
     if (r < pid_reg::NREGS_RAM)
       par_[ax].word[r] = data;
     else if (r == pid_reg::CTRL)
-      en_[ax] = data & 1;
+      en_[ax] = SERVO && (data & 1);
   }
 
   uint32_t read(uint8_t addr) const {
@@ -218,11 +220,11 @@ constexpr int clog2(int v) {
   return v <= 1 ? 0 : 1 + clog2((v + 1) / 2);
 }
 
-template <int NAXES>
+template <int NAXES, bool SERVO = true>
 class PidCoreClocked {
  public:
   bool operator==(const PidCoreClocked&) const = default;
-  static constexpr int latency = PidCore<NAXES>::latency;
+  static constexpr int latency = PidCore<NAXES, SERVO>::latency;
   // State RAM depth: clog2(NAXES + 1) slot bits + 3 word bits (rtl/pid_core.v).
   static constexpr int clear_cycles = 8 << clog2(NAXES + 1);
 
@@ -249,7 +251,7 @@ class PidCoreClocked {
   // Clocks since the tick in the current clock during a sweep (1 in the
   // clock after the tick, latency in done's), else 0.
   int sweep_clock() const { return run_ ? latency - left_ : done_ ? latency : 0; }
-  const PidCore<NAXES>& core() const { return core_; }
+  const PidCore<NAXES, SERVO>& core() const { return core_; }
 
   // Fast-forward: with no port activity, no tick due in the next n clocks
   // and, inside a sweep, its last clock (done) not among them, a clock only
@@ -308,7 +310,7 @@ class PidCoreClocked {
   }
 
  private:
-  PidCore<NAXES> core_;
+  PidCore<NAXES, SERVO> core_;
   bool clr_ = true, tick_ = false, run_ = false, done_ = false, rvalid_ = false;
   int cc_ = 0, left_ = 0;
   uint32_t tcnt_ = 1, rdata_ = 0;

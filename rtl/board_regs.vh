@@ -2,7 +2,7 @@
 // Link protocol constants (P_), register addresses (R_; R_AX_ are offsets within an
 // axis's block) and register fields (B_). docs/protocol.md explains them.
 localparam [7:0] P_SYNC = 8'hA5;
-localparam [7:0] P_VERSION = 8'h04;
+localparam [7:0] P_VERSION = 8'h05;
 localparam integer P_HDR_BYTES = 4;
 localparam integer P_CRC_BYTES = 2;
 localparam integer P_MAX_LEN = 240;
@@ -71,6 +71,9 @@ localparam [31:0] B_ID_MAGIC = 32'h4D430000;
 localparam integer B_INFO_NAXES_LSB = 0;
 localparam integer B_INFO_FIFO_AW_LSB = 4;
 localparam integer B_INFO_VERSION_LSB = 8;
+localparam integer B_INFO_STEPPERS_LSB = 16;
+localparam integer B_INFO_SERVO = 19;
+localparam integer B_INFO_HANDWHEEL = 20;
 localparam integer B_ST_ARMED = 0;
 localparam integer B_ST_ESTOP_IN = 1;
 localparam integer B_ST_IP_BUSY = 2;

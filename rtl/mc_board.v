@@ -21,7 +21,8 @@ module mc_board #(
     parameter integer CLK_HZ   = 12_000_000,  // clock, Hz
     parameter integer BAUD     = 1_000_000,   // UART rate, bit/s
     parameter integer HANDWHEEL = 1,          // 1: build the handwheel decoder, 0: HW_POS reads 0
-    parameter integer STEPPERS  = 0           // axes that can be steppers (bit a: axis a; mc_step)
+    parameter integer STEPPERS  = 0,          // axes that can be steppers (bit a: axis a; mc_step)
+    parameter integer SERVO     = 1           // 1: the PID loops (servo axes); 0: none, a stepper-only board
 ) (
     // clock and reset
     input  wire             clk,
@@ -172,7 +173,10 @@ module mc_board #(
       .FIFO_AW(FIFO_AW),
       .FILT_W (FILT_W),
       .CLK_HZ (CLK_HZ),
-      .BAUD   (BAUD)
+      .BAUD   (BAUD),
+      .STEPPERS (STEPPERS),
+      .SERVO    (SERVO),
+      .HANDWHEEL(HANDWHEEL)
   ) u_regs (
       .clk               (clk),
       .rst               (rst),
@@ -295,7 +299,8 @@ module mc_board #(
       .FIFO_AW (FIFO_AW),
       .PWM_BITS(PWM_BITS),
       .FILT_W  (FILT_W),
-      .IDX_RAM (1)  // 96 flip-flops fewer for three axes
+      .IDX_RAM (1),  // 96 flip-flops fewer for three axes
+      .SERVO   (SERVO)
   ) u_core (
       .clk             (clk),
       .rst             (rst),

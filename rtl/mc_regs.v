@@ -40,7 +40,11 @@ module mc_regs #(
     parameter integer FIFO_AW = 9,           // interpolator queue, log2 words
     parameter integer FILT_W  = 8,           // encoder filter length bits (the field is 8; longer values clamp)
     parameter integer CLK_HZ  = 12_000_000,  // clock, Hz
-    parameter integer BAUD    = 1_000_000    // UART rate, bit/s
+    parameter integer BAUD    = 1_000_000,   // UART rate, bit/s
+    // What the board was built with, for INFO only
+    parameter integer STEPPERS  = 0,  // axes with a step generator, bit a for axis a
+    parameter integer SERVO     = 1,  // the PID loops are built
+    parameter integer HANDWHEEL = 1   // the handwheel decoder is built
 ) (
     // clock and reset
     input  wire                    clk,
@@ -150,6 +154,9 @@ module mc_regs #(
   /* verilator lint_off WIDTH */
   localparam [3:0] NAXES4 = NAXES;
   localparam [3:0] FIFO_AW4 = FIFO_AW;
+  localparam [2:0] STEPPERS3 = STEPPERS & ((1 << NAXES) - 1);
+  localparam [0:0] SERVO1 = (SERVO != 0);
+  localparam [0:0] HANDWHEEL1 = (HANDWHEEL != 0);
   localparam [31:0] CLK32 = CLK_HZ;
   localparam [31:0] BAUD32 = BAUD;
   localparam [23:0] WDOG_RESET = CLK_HZ / 10;  // wdog_default() of hls/board_regs.hpp
@@ -194,7 +201,7 @@ module mc_regs #(
     shadow[R_SAFETY[7:0]] = B_SAFETY_DEFAULT;
     // The constants are read from here too (never written: not writable).
     shadow[R_ID[7:0]]     = B_ID_MAGIC | {24'd0, P_VERSION};
-    shadow[R_INFO[7:0]]   = {16'd0, P_VERSION, FIFO_AW4, NAXES4};
+    shadow[R_INFO[7:0]]   = {11'd0, HANDWHEEL1, SERVO1, STEPPERS3, P_VERSION, FIFO_AW4, NAXES4};
     shadow[R_CLK_HZ[7:0]] = CLK32;
     shadow[R_BAUD[7:0]]   = BAUD32;
   end

@@ -46,7 +46,8 @@ module motion_core #(
     parameter integer FIFO_AW  = 9,  // log2 of the segment queue depth in words
     parameter integer PWM_BITS = 9,  // PWM period 2^PWM_BITS clocks, duty resolution
     parameter integer FILT_W   = 8,  // encoder glitch filter length width, bits
-    parameter integer IDX_RAM  = 0   // the decoders' index latches in block RAM (quad_decoder)
+    parameter integer IDX_RAM  = 0,  // the decoders' index latches in block RAM (quad_decoder)
+    parameter integer SERVO    = 1   // 0: pid_core without its loops (every axis disabled)
 ) (
     // clock and reset
     input  wire                  clk,
@@ -215,7 +216,8 @@ module motion_core #(
   wire [        31:0] pid_smp_wd;
   /* verilator lint_off PINCONNECTEMPTY */
   pid_core #(
-      .NAXES(NAXES)
+      .NAXES(NAXES),
+      .SERVO(SERVO)
   ) u_pid (
       .clk       (clk),
       .rst       (rst),

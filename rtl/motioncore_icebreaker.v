@@ -9,6 +9,10 @@
 //
 // The UART runs at BAUD over the FTDI FT2232H's second channel (the board's
 // RX/TX pins); 12 MHz / BAUD must be a whole number of clocks (uart_rx).
+//
+// Two builds fit the UP5K (docs/board.md): the servo board (STEPPERS = 0,
+// SERVO = 1, `make synth`) and the stepper board (STEPPERS = 7, SERVO = 0,
+// `make synth-stepper`); INFO tells the host which it is.
 `default_nettype none
 
 module motioncore_icebreaker #(
@@ -16,7 +20,8 @@ module motioncore_icebreaker #(
     parameter integer CLK_HZ = 12_000_000,  // the board oscillator, Hz
     parameter integer BAUD   = 1_000_000,   // host link, bit/s
     parameter integer HANDWHEEL = 1,        // build the handwheel decoder
-    parameter integer STEPPERS  = 0         // axes built with a step generator (bit a: axis a)
+    parameter integer STEPPERS  = 0,        // axes built with a step generator (bit a: axis a)
+    parameter integer SERVO     = 1         // the PID loops; 0: a stepper board without them
 ) (
     // clock: 12 MHz oscillator
     input  wire CLK,
@@ -92,7 +97,8 @@ module motioncore_icebreaker #(
       .CLK_HZ(CLK_HZ),
       .BAUD  (BAUD),
       .HANDWHEEL(HANDWHEEL),
-      .STEPPERS (STEPPERS)
+      .STEPPERS (STEPPERS),
+      .SERVO    (SERVO)
   ) u_board (
       .clk        (clk_w),
       .rst        (rst),

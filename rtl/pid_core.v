@@ -63,10 +63,18 @@
 //  16  x: sat32(e + e1)            a: acc <- da
 //  17                              a: acc += db -> D(k)          KI*sum
 // A disabled axis runs the same steps; ic, D(k), v and u are forced to zero.
+//
+// SERVO = 0 builds the core without its loops, for a board whose axes are
+// all steppers: no axis can be enabled, so every output word is a disabled
+// axis's (u = 0), and the back ALU, the back RAM and the multiplier, whose
+// results nothing then reads, are trimmed. The timer, the input chain and
+// the front ALU stay: the sample stream (command, feedback, error,
+// following error) is the board's telemetry and FERR check.
 `default_nettype none
 
 module pid_core #(
-    parameter integer NAXES = 3  // axes sharing the datapath (1..15)
+    parameter integer NAXES = 3,  // axes sharing the datapath (1..15)
+    parameter integer SERVO = 1   // 0: no loops (a stepper board): every axis stays disabled
 ) (
     // clock and reset
     input  wire                   clk,
@@ -376,7 +384,7 @@ module pid_core #(
       en <= {NAXES{1'b0}};
     end else if (w_ok) begin
       for (ea = 0; ea < NAXES; ea = ea + 1) begin
-        if (w_ax == ea[3:0] && w_rg == PID_REG_CTRL) en[ea] <= cfg_wdata[0];
+        if (w_ax == ea[3:0] && w_rg == PID_REG_CTRL) en[ea] <= cfg_wdata[0] & (SERVO != 0);
       end
     end
   end
@@ -802,12 +810,16 @@ module pid_core #(
   // steps decide on it), from flip-flops otherwise.
   wire ba_we = ba_wa | (ba_wp & ~ba_neg) | (ba_wn & ba_neg);
 
+  // SERVO = 0: the accumulator and the limit flags stay zero, as a
+  // disabled axis's outputs are, and synthesis trims the back ALU, the back
+  // RAM and the multiplier, which then drive nothing.
+  localparam [0:0] LOOPS = (SERVO != 0);
   always @(posedge clk) begin
-    if (rst) ba_acc <= {W{1'b0}};
+    if (rst || !LOOPS) ba_acc <= {W{1'b0}};
     else if (ba_we) ba_acc <= ba_r;
     // The selects that clamp v record whether the limit was active.
-    if (ba_seto) over <= ~ba_z & ~ba_neg;
-    if (ba_setu) under <= ~ba_z & ba_neg;
+    if (ba_seto) over <= LOOPS & ~ba_z & ~ba_neg;
+    if (ba_setu) under <= LOOPS & ~ba_z & ba_neg;
   end
 
   // ---------------------------------------------------------------------

@@ -48,3 +48,4 @@ set_tests_properties(GrblClient.cncjs.sim PROPERTIES LABELS client TIMEOUT 180)
 add_test(NAME GrblClient.bcnc.sim
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_bcnc.py $<TARGET_FILE:motionctl> --sim)
 set_tests_properties(GrblClient.bcnc.sim PROPERTIES LABELS client TIMEOUT 180)
+target_compile_definitions(test_grbl_board PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

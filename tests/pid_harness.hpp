@@ -25,8 +25,9 @@ int64_t get_acc(const A& arr, int i) {
   return sext(uint64_t(arr[i]), ACC_W);
 }
 
-// Model: a Verilated pid_core (V<prefix>); NAXES must match its parameter.
-template <typename Model, int NAXES>
+// Model: a Verilated pid_core (V<prefix>); NAXES and SERVO must match its
+// parameters.
+template <typename Model, int NAXES, bool SERVO = true>
 class PidCosimT {
  public:
   static constexpr int kAxes = NAXES;
@@ -142,7 +143,7 @@ class PidCosimT {
     edge();
   }
 
-  const PidCore<kAxes>& twin() const { return twin_; }
+  const PidCore<kAxes, SERVO>& twin() const { return twin_; }
   Model& dut() { return *dut_; }
   uint64_t samples() const { return samples_; }
   uint64_t cycles() const { return cycles_; }
@@ -152,7 +153,7 @@ class PidCosimT {
   int32_t err(int a) const { return int32_t(get_bits(dut_->err_o, 32 * a, 32)); }
   bool sat(int a) const { return (dut_->sat_o >> a) & 1; }
   int mismatches() const { return mismatches_; }
-  static int Vlat() { return PidCore<kAxes>::latency; }
+  static int Vlat() { return PidCore<kAxes, SERVO>::latency; }
 
  private:
   void settle() {
@@ -199,7 +200,7 @@ class PidCosimT {
   };
   std::unique_ptr<VerilatedContext> ctx_;
   std::unique_ptr<Model> dut_;
-  PidCore<kAxes> twin_;
+  PidCore<kAxes, SERVO> twin_;
   std::deque<W> wq_;
   std::array<int32_t, kAxes> cmd_{}, fb_{};
   uint64_t cycles_ = 0, samples_ = 0, ticks_ = 0, last_tick_ = 0, last_period_ = 0, last_latency_ = 0;

@@ -2,6 +2,8 @@
 # co-simulation tests.
 
 mc_verilate(vpid_core TOP pid_core SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
+mc_verilate(vpid_core_noloops TOP pid_core PREFIX Vpid_core_noloops PARAMS -GSERVO=0
+            SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vpid_core1 TOP pid_core PREFIX Vpid_core1 PARAMS -GNAXES=1
   SOURCES ${MC_RTL_DIR}/pid_core.v ${MC_RTL_DIR}/mul_align.v)
 mc_verilate(vmul_align TOP mul_align SOURCES ${MC_RTL_DIR}/mul_align.v)
@@ -30,7 +32,7 @@ target_link_libraries(test_quad_decoder_twin PRIVATE mc_hls)
 
 # C/RTL co-simulation: the twin is the scoreboard.
 mc_gtest(test_pid_rtl rtl test_pid_rtl.cpp)
-target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1)
+target_link_libraries(test_pid_rtl PRIVATE mc_hls vpid_core vpid_core1 vpid_core_noloops)
 mc_gtest(test_interp_rtl rtl test_interp_rtl.cpp)
 target_link_libraries(test_interp_rtl PRIVATE mc_hls mc_motion vinterp_core)
 mc_gtest(test_mul_align_rtl rtl test_mul_align_rtl.cpp)
@@ -93,6 +95,13 @@ target_link_libraries(test_protocol PRIVATE mc_link)
 add_test(NAME synth_board_icebreaker
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth.sh ${CMAKE_BINARY_DIR}/synth_test)
 set_tests_properties(synth_board_icebreaker PROPERTIES LABELS synth TIMEOUT 1800 RUN_SERIAL ON)
+# The stepper board as `make synth-stepper` builds it: a step generator on
+# every axis, no PID loops. It has room to spare (no DSP, 88 %), so it runs
+# beside the other tests.
+add_test(NAME synth_board_icebreaker_stepper
+  COMMAND ${CMAKE_COMMAND} -E env STEPPERS=7 SERVO=0
+    ${CMAKE_SOURCE_DIR}/scripts/synth.sh ${CMAKE_BINARY_DIR}/synth_test_stepper)
+set_tests_properties(synth_board_icebreaker_stepper PROPERTIES LABELS synth TIMEOUT 1800)
 
 # The step/dir generator of stepper axes: its twin driving a model of a
 # driver's STEP/DIR input, and the RTL against the twin at two widths.

@@ -15,3 +15,6 @@ add_dependencies(test_cli_plant motionctl)
 # The stepper axis's plant: resonance, detents, followed and lost steps.
 mc_gtest(test_stepper_motor unit test_stepper_motor.cpp)
 target_link_libraries(test_stepper_motor PRIVATE mc_plant)
+mc_gtest(test_board_setup unit test_board_setup.cpp)
+target_link_libraries(test_board_setup PRIVATE mc_machine)
+target_compile_definitions(test_board_setup PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

@@ -22,8 +22,14 @@ uint16_t ax(int a, uint16_t off) {
 TEST(BoardRtl, IdentityAndRegisterRoundTrips) {
   BoardTb tb;
   EXPECT_EQ(tb.read(br::ID), bb::ID_MAGIC | bp::VERSION);
-  EXPECT_EQ(tb.read(br::INFO),
-            3u | 9u << bb::INFO_FIFO_AW_LSB | uint32_t(bp::VERSION) << bb::INFO_VERSION_LSB);
+  // The Verilated board: three axes, a step generator on each
+  // (MC_VBOARD_STEPPERS), the loops and the handwheel.
+  const uint32_t info = tb.read(br::INFO);
+  EXPECT_EQ(info, 3u | 9u << bb::INFO_FIFO_AW_LSB | uint32_t(bp::VERSION) << bb::INFO_VERSION_LSB |
+                      uint32_t(MC_VBOARD_STEPPERS) << 16 | 1u << 19 | 1u << 20);
+  EXPECT_EQ(bb::info_steppers(info), MC_VBOARD_STEPPERS);
+  EXPECT_TRUE(bb::info_servo(info));
+  EXPECT_TRUE(bb::info_handwheel(info));
   EXPECT_EQ(tb.read(br::CLK_HZ), uint32_t(kClkHz));
   EXPECT_EQ(tb.read(br::BAUD), uint32_t(kBaud));
   // Reset values of the writable registers.

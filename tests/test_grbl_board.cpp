@@ -19,11 +19,13 @@
 #include <vector>
 
 #include "hls/board_regs.hpp"
+#include "hls/pid_regs.hpp"
 #include "host/base/errors.hpp"
 #include "host/grbl/board_backend.hpp"
 #include "host/grbl/protocol.hpp"
 #include "host/grbl/settings.hpp"
 #include "host/link/board_link.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/job.hpp"
 #include "sim/vboard/board_stream.hpp"
 #include "sim/vboard/virtual_board.hpp"
@@ -54,19 +56,19 @@ Report parse(const std::string& r) {
   return p;
 }
 
-// The default machine's virtual board in this process, on board time, and a
-// link to it.
+// A machine's virtual board (the default machine's unless told) in this
+// process, on board time, and a link to it.
 struct InProcessBoard {
-  const machine::MachineConfig m = machine::default_machine();
+  const machine::MachineConfig m;
   sim::VirtualBoard board{m};
   sim::BoardStream stream{board};
   host::BoardLink link{stream};
-  InProcessBoard() { link.connect(); }
+  explicit InProcessBoard(machine::MachineConfig mc = machine::default_machine()) : m(std::move(mc)) { link.connect(); }
 };
 
 class BoardRig {
  public:
-  BoardRig() {
+  explicit BoardRig(machine::MachineConfig m = machine::default_machine()) : ib_(std::move(m)) {
     backend_ = std::make_unique<BoardBackend>(link_, m_);
     EngineOptions o;
     o.stored.settings = default_settings(m_);
@@ -78,6 +80,7 @@ class BoardRig {
   double now() const { return board_.board_seconds(); }
   BoardBackend& backend() { return *backend_; }
   host::BoardLink& link() { return link_; }
+  sim::VirtualBoard& board() { return board_; }
   const std::string& out() const { return out_; }
   const machine::MachineConfig& machine() const { return m_; }
 
@@ -183,6 +186,35 @@ TEST(GrblBoard, StreamedJobRunsOnTimeAndEndsAtItsEndPoint) {
   EXPECT_GT(took, 0.95 * planned);
   rig.run_for(0.2);  // the servo settles
   expect_at(rig.status(), 5, 5, -0.2);
+}
+
+// The stepper router (configs/stepper_router.toml) runs a job from a
+// sender as the servo router does: STEP_CFG set from the machine file, no
+// PID enabled, every count of the command sent as one STEP pulse, none lost
+// within the motors' torque, and the job ends at its end point exactly.
+TEST(GrblBoard, StepperRouterRunsAJobWithEveryStepSent) {
+  BoardRig rig(machine::load_machine(std::string(MC_SOURCE_DIR) + "/configs/stepper_router.toml"));
+  const std::vector<std::string> lines = {"G21 G90 G17 G94",     "G1 Z-0.5 F600",   "G1 X4 Y2 F1500",
+                                          "G2 X8 Y2 I2 J0",      "G1 X8 Y-1 F2000", "G0 X1 Y1 Z0.5",
+                                          "G1 X1 Y2 Z-0.25 F900"};
+  rig.stream(lines, 30);
+  EXPECT_EQ(rig.out().find("error"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+  ASSERT_TRUE(rig.run_until_state("Idle", 20));
+  EXPECT_EQ(rig.link().read(br::STEP_CFG), machine::step_cfg_word(rig.machine()));
+  constexpr int64_t kEnd[3] = {400, 800, -100};
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(rig.link().read(mc::pid_reg::addr(uint8_t(a), mc::pid_reg::CTRL)) & 1, 0u) << "axis " << a;
+    // Every count of the way was a pulse: the driver's count is the
+    // command's (400 counts/mm: X1 Y2 Z-0.25 from where the board started).
+    EXPECT_EQ(int32_t(rig.link().read(br::axis(a, br::AX_CMD))), kEnd[a]) << "axis " << a;
+    EXPECT_EQ(rig.board().driver_steps(a), kEnd[a]) << "axis " << a;
+    EXPECT_EQ(rig.board().lost_full_steps(a), 0) << "axis " << a;
+  }
+  EXPECT_GT(rig.link().read(br::axis(0, br::AX_FERR)) & 0xFFFF, 0u) << "FERR is armed on a stepper axis";
+  const Report r = rig.status();
+  EXPECT_EQ(r.state, "Idle");
+  expect_at(r, 1, 2, -0.25, 1.0 / 400);
 }
 
 TEST(GrblBoard, HoldStopsAlongThePathAndResumeFinishesTheJob) {

@@ -10,6 +10,8 @@
 #include "Vpid_core1.h"
 #include "Vpid_core1___024root.h"
 #include "Vpid_core___024root.h"
+#include "Vpid_core_noloops.h"
+#include "Vpid_core_noloops___024root.h"
 #include "pid_harness.hpp"
 
 namespace mc::test {
@@ -19,6 +21,8 @@ namespace {
 // that the parameter, the one-bit axis field and the 16-word RAM hold up.
 using PidCosim = PidCosimT<Vpid_core, 3>;
 using PidCosim1 = PidCosimT<Vpid_core1, 1>;
+// The stepper board's build: the datapath without its loops.
+using PidCosimNoLoops = PidCosimT<Vpid_core_noloops, 3, false>;
 constexpr int kAxes = PidCosim::kAxes;
 
 using namespace mc::pid_reg;
@@ -143,6 +147,36 @@ TEST(PidRtl, RandomBitExact) {
 
 TEST(PidRtl, RandomBitExactOneAxis) {
   random_bit_exact<PidCosim1>(env_count("MC_PID_RTL_SAMPLES", 1000000) / 4);
+}
+
+TEST(PidRtl, RandomBitExactWithoutLoops) {
+  random_bit_exact<PidCosimNoLoops>(env_count("MC_PID_RTL_SAMPLES", 1000000) / 4);
+}
+
+// SERVO = 0: an enable is refused, the drive output stays 0 whatever the
+// gains and the error, and the front end (error, deadband) still works,
+// for the sample stream the board's telemetry reads.
+TEST(PidRtl, WithoutLoopsNoAxisCanBeEnabled) {
+  PidCosimNoLoops sim(3);
+  for (int a = 0; a < kAxes; ++a) {
+    sim.write(addr(uint8_t(a), KP), coef(3 << 20, 20));
+    sim.write(addr(uint8_t(a), KI), coef(1 << 20, 20));
+    sim.write(addr(uint8_t(a), OLIM), 30000);
+    sim.write(addr(uint8_t(a), CTRL), 1);
+    EXPECT_EQ(sim.read(addr(uint8_t(a), CTRL)), 0u) << "axis " << a;
+    EXPECT_EQ(sim.read(addr(uint8_t(a), OLIM)), 30000u) << "the gains still read back";
+  }
+  for (int i = 0; i < 20; ++i) {
+    sim.set_inputs({1000 + i, -500, 7}, {0, 0, 0});
+    ASSERT_TRUE(sim.run_sample());
+    for (int a = 0; a < kAxes; ++a) {
+      EXPECT_EQ(sim.u(a), 0) << "axis " << a;
+      EXPECT_FALSE(sim.sat(a)) << "axis " << a;
+    }
+    EXPECT_EQ(sim.err(0), 1000 + i);
+    EXPECT_EQ(sim.err(1), -500);
+  }
+  EXPECT_EQ(sim.mismatches(), 0);
 }
 
 TEST(PidRtl, LatencyPeriodAndTsClamp) {

@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "host/base/errors.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
@@ -219,6 +220,7 @@ Board open_board() {
   }
   b.link = std::make_unique<BoardLink>(*b.port);
   b.link->connect();
+  mc::machine::setup_axes(*b.link, machine());
   // The machine's following-error limit holds whenever a command of ours
   // arms the drives: a runaway trips a fault instead of running on.
   mc::machine::arm_following_limits(*b.link, machine());

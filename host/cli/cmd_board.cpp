@@ -18,6 +18,7 @@
 #include "host/cli/commands.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/limits.hpp"
 #include "host/motion/board_run.hpp"
 
@@ -55,7 +56,7 @@ void enable(const std::string& axis, bool json) {
   BoardLink& l = *b.link;
   const int naxes = read_naxes(l);
   const std::vector<int> axes = axes_of(axis, naxes);
-  enable_axes(l, axes, note);
+  mc::machine::enable_machine_axes(l, machine(), axes, note);
   mc::machine::arm_following_limits(l, machine());
   const BoardState s = read_state(l);
   if (json) {
@@ -156,7 +157,7 @@ void jog(const MotionOptions& o) {
   if (axis_scales()[size_t(a)] == 0)
     throw InputError("--axis", quote(o.axis), "an axis of the machine config (" + machine().source + ")");
   Board b = open_board();
-  require_enabled(*b.link, a);
+  mc::machine::require_ready(*b.link, machine(), a);
   move_to(
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {
@@ -179,7 +180,7 @@ void move(const MotionOptions& o) {
                        "no coordinate for axis " + std::string(axis_name(int(a))) +
                            ", which the machine config (" + machine().source + ") does not describe");
   Board b = open_board();
-  for (size_t a = 0; a < mm.size(); ++a) require_enabled(*b.link, int(a));
+  for (size_t a = 0; a < mm.size(); ++a) mc::machine::require_ready(*b.link, machine(), int(a));
   move_to(
       *b.link,
       [&](const Vec3& from, const std::array<double, 3>& s) {

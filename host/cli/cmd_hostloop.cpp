@@ -21,6 +21,7 @@
 #include "host/control/board_gains.hpp"
 #include "host/control/pid_double.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/limits.hpp"
 #include "host/machine/machine_config.hpp"
 
@@ -37,6 +38,7 @@ struct HostloopOptions {
 
 void hostloop(const HostloopOptions& o) {
   const int a0 = parse_axis(o.axis);
+  mc::machine::require_servo(machine(), a0, "motionctl hostloop");
   const double ts_host = parse_duration(o.ts, "--ts");
   const double duration = parse_duration(o.duration, "--duration");
   if (duration > 10) throw InputError("--duration", quote(o.duration), "at most 10 s");

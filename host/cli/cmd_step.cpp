@@ -21,6 +21,7 @@
 #include "host/control/board_experiments.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/limits.hpp"
 
 namespace mc::host::cli {
@@ -70,6 +71,7 @@ void write_step_plot(const std::string& png, const StepCapture& c, double cpm) {
 
 void step(const StepOptions& o) {
   const int a0 = parse_axis(o.axis);
+  mc::machine::require_servo(machine(), a0, "motionctl step");
   const double mm = parse_number(o.size, "--size");
   const double duration = parse_duration(o.duration, "--duration");
   if (duration > 10) throw InputError("--duration", quote(o.duration), "at most 10 s");

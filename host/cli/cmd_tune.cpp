@@ -21,6 +21,7 @@
 #include "host/control/board_gains.hpp"
 #include "host/control/tuning.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/board_setup.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -35,6 +36,7 @@ struct TuneOptions {
 
 void tune(const TuneOptions& o) {
   const int a0 = parse_axis(o.axis);
+  mc::machine::require_servo(machine(), a0, "motionctl tune");
   if (o.method != "model" && o.method != "relay")
     throw InputError("--method", quote(o.method), "model or relay");
   const double zeta = parse_number(o.zeta, "--zeta");

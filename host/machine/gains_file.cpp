@@ -136,6 +136,7 @@ int load_gains(mc::host::BoardLink& l, const GainsFile& f, const std::string& fi
 int gains_where_missing(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note) {
   int n = 0;
   for (size_t a = 0; a < m.axes.size(); ++a) {
+    if (m.axes[a].stepper) continue;  // no loop to give gains to
     mc::host::AxisGains cur = mc::host::read_gains(l, int(a));
     if (cur.gains.kp != 0 || cur.gains.ki != 0) continue;
     const PidConfig& p = m.axes[a].pid;

@@ -33,7 +33,7 @@ int save_gains(mc::host::BoardLink& l, const std::string& path);
 int load_gains(mc::host::BoardLink& l, const GainsFile& f, const std::string& path,
                const mc::host::Note& warn);
 
-// Gives every axis of the machine that has no gains on the board (Kp = Ki =
+// Gives every servo axis of the machine that has no gains on the board (Kp = Ki =
 // 0, as after power-up) the machine config's, with a note for each; axes
 // with gains keep them. Returns how many axes it wrote.
 int gains_where_missing(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "host/base/errors.hpp"
+#include "host/machine/board_setup.hpp"
 #include "host/machine/gains_file.hpp"
 #include "host/machine/limits.hpp"
 
@@ -80,6 +81,7 @@ Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start
 }
 
 JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note) {
+  setup_axes(l, m);  // refuses a board not built for the machine's axes
   mc::host::BoardState st = mc::host::read_state(l);
   JobBoard b;
   for (int a = 0; a < int(m.axes.size()) && a < st.naxes; ++a) b.axes.push_back(a);
@@ -90,7 +92,7 @@ JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::h
   if (gains_where_missing(l, m, note) > 0) st = mc::host::read_state(l);
   b.ts_s = st.ts_s();
   // Enabling starts the command where the axes are.
-  b.at = mc::host::enable_axes(l, b.axes, note);
+  b.at = enable_machine_axes(l, m, b.axes, note);
   arm_following_limits(l, m);  // a runaway trips FERR instead of running on
   return b;
 }

@@ -88,8 +88,11 @@ void arm_following_limits(mc::host::BoardLink& l, const MachineConfig& m) {
   const std::array<uint32_t, 3> c = ferr_counts(m);
   const int naxes = mc::host::read_naxes(l);
   for (int a = 0; a < naxes && a < int(axes_of(m)); ++a) {
-    const bool enabled = l.read(mc::pid_reg::addr(uint8_t(a), mc::pid_reg::CTRL)) & 1;
-    const uint32_t want = enabled ? c[size_t(a)] : 0;
+    // A stepper axis holds its position whenever armed: FOLLOW is the steps
+    // owed (open loop) or the steps lost (closed loop).
+    const bool held =
+        m.axes[size_t(a)].stepper || (l.read(mc::pid_reg::addr(uint8_t(a), mc::pid_reg::CTRL)) & 1);
+    const uint32_t want = held ? c[size_t(a)] : 0;
     const uint16_t addr = br::axis(a, br::AX_FERR);
     if ((l.read(addr) & kFerrMax) != want) l.write_verify(addr, want, kFerrMax);
   }

@@ -41,7 +41,8 @@ int64_t counts_of(double mm, double counts_per_m);
 // machine lacks): max_following_error_m at the axis' scale, at least 1.
 std::array<uint32_t, 3> ferr_counts(const MachineConfig& m);
 // Writes and verifies FERR on each axis the machine has (and the board):
-// ferr_counts() on the axes whose PID is enabled, 0 (off) on the others,
+// ferr_counts() on the axes whose PID is enabled and on stepper axes, 0
+// (off) on the others,
 // whose position nothing holds (a Z carriage sinks under its weight while
 // its PID is off). Commands call it when they connect and after they enable
 // axes, so the limit holds whenever their drives are armed.

@@ -36,6 +36,7 @@ constexpr double kMinClockHz = 2 * kLinkBaud;
 constexpr double kMaxClockHz = 10.0 * double((1u << mc::board::WDOG_W) - 1);
 // The FERR register holds the following-error limit in 16 bits of counts.
 constexpr double kMaxFerrCounts = 65535;
+static_assert(kStepTimeMaxClocks == (1 << mc::board::bits::SC_TIME_BITS) - 1);
 // Positions are 32-bit counts on the board.
 constexpr double kMaxPosCounts = 2147483647.0;
 
@@ -119,6 +120,14 @@ class Reader {
     const auto* b = n.as_boolean();
     if (!b) throw bad(key, n, "true or false", "wrong type");
     return b->get();
+  }
+  bool boolean_or(std::string_view key, bool fallback) {
+    if (!has(key)) {
+      used_.insert(std::string(key));
+      order_.emplace_back(key);
+      return fallback;
+    }
+    return boolean(key);
   }
 
   std::string string(std::string_view key, const std::vector<std::string>& allowed) {
@@ -264,12 +273,25 @@ PidConfig read_pid(Reader r, double clock_hz) {
   return p;
 }
 
-StepperConfig read_stepper(Reader r) {
+StepperConfig read_stepper(Reader r, double clock_hz) {
   StepperConfig s;
   s.rotor_teeth = r.integer("rotor_teeth", 1, 1000, "rotor teeth: 50 for 200 full steps per rev");
   s.microsteps = r.integer("microsteps", 1, 256, "STEP pulses per full step");
   s.current_a = r.number("current_a", Range::positive, "A", 100, "a stepper driver's phase current");
   s.detent_nm = r.number("detent_nm", Range::non_negative, "N*m", 100, "a stepper's cogging torque");
+  // STEP_CFG holds each time as 1..63 board clocks.
+  const double longest = double(kStepTimeMaxClocks) / clock_hz;
+  const std::string why = std::to_string(kStepTimeMaxClocks) + " board clocks, what STEP_CFG holds";
+  s.step_pulse_s = r.number_or("step_pulse_s", s.step_pulse_s, Range::positive, "s");
+  s.dir_setup_s = r.number_or("dir_setup_s", s.dir_setup_s, Range::positive, "s");
+  for (const auto& [key, v] :
+       {std::pair{"step_pulse_s", s.step_pulse_s}, std::pair{"dir_setup_s", s.dir_setup_s}})
+    if (v > longest)
+      throw r.error(key, format_number(v),
+                    "0 < " + std::string(key) + " <= " + format_number(longest) + " s (" + why + ")");
+  s.closed_loop = r.boolean_or("closed_loop", false);
+  s.step_active_low = r.boolean_or("step_active_low", false);
+  s.dir_reversed = r.boolean_or("dir_reversed", false);
   r.finish();
   return s;
 }
@@ -314,7 +336,7 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   a.drive = read_drive(r.table("drive"), clock_hz);
   a.pid = read_pid(r.table("pid"), clock_hz);
   if (r.has("stepper")) {
-    a.stepper = read_stepper(r.table("stepper"));
+    a.stepper = read_stepper(r.table("stepper"), clock_hz);
     if (a.encoder_cpr != a.stepper->steps_per_rev())
       throw r.error("encoder_counts_per_rev", std::to_string(a.encoder_cpr),
                     std::to_string(a.stepper->steps_per_rev()) +
@@ -456,6 +478,11 @@ const AxisConfig& axis(const MachineConfig& m, std::string_view name) {
     valid += (valid.empty() ? "" : ", ") + a.name;
   }
   throw InputError("axis", quote(name), "one of the axes in " + m.source + ": " + valid, "no such axis");
+}
+
+int step_time_clocks(double seconds, double clock_hz) {
+  // A hair below a whole clock counts as that clock: 2 us at 12 MHz is 24.
+  return std::clamp(int(std::ceil(seconds * clock_hz - 1e-6)), 1, kStepTimeMaxClocks);
 }
 
 double counts_per_m(const AxisConfig& a) {

@@ -53,8 +53,21 @@ struct StepperConfig {
   int microsteps = 16;      // steps of the STEP input per full step
   double current_a = 1.5;   // the driver's phase current setting (peak)
   double detent_nm = 0.01;  // unpowered cogging torque
+  // The driver's timing and wiring (STEP_CFG). Defaults suit the A4988,
+  // DRV8825 and TMC drivers: 2 us pulses (the DRV8825 needs 1.9 us) and
+  // 1 us from a direction change to the next pulse (it needs 650 ns).
+  double step_pulse_s = 2e-6;
+  double dir_setup_s = 1e-6;
+  bool closed_loop = false;      // a shaft encoder on the axis's encoder pins: lost steps trip FERR
+  bool step_active_low = false;  // the STEP input pulses low (an optocoupled input to ground)
+  bool dir_reversed = false;     // the motor turns the other way for +travel
   int steps_per_rev() const { return 4 * rotor_teeth * microsteps; }
 };
+// STEP_CFG's pulse and setup fields: 1..kStepTimeMaxClocks board clocks.
+constexpr int kStepTimeMaxClocks = 63;
+// A driver time as STEP_CFG clocks: rounded up, so the driver gets at least
+// what it needs.
+int step_time_clocks(double seconds, double clock_hz);
 
 // In core units (host/pid_design.hpp): drive units (+-32767) per encoder count.
 struct PidConfig {

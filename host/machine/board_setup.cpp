@@ -1,0 +1,89 @@
+#include "host/machine/board_setup.hpp"
+
+#include <string>
+
+#include "hls/board_regs.hpp"
+#include "host/base/errors.hpp"
+
+namespace mc::machine {
+
+namespace br = mc::board::reg;
+namespace bb = mc::board::bits;
+using mc::host::InputError;
+
+namespace {
+
+bool is_stepper(const MachineConfig& m, int a) {
+  return a < int(m.axes.size()) && m.axes[size_t(a)].stepper.has_value();
+}
+
+std::string build_hint(bool stepper) {
+  return stepper ? " (make synth-stepper builds one)" : " (make synth builds one)";
+}
+
+}  // namespace
+
+uint32_t step_cfg_word(const MachineConfig& m) {
+  uint32_t w = 0;
+  bool timed = false;
+  for (size_t a = 0; a < m.axes.size() && a < 3; ++a) {
+    if (!m.axes[a].stepper) continue;
+    const StepperConfig& s = *m.axes[a].stepper;
+    w |= 1u << (bb::SC_STEPPER_LSB + a);
+    if (s.closed_loop) w |= 1u << (bb::SC_CLOSED_LSB + a);
+    if (s.step_active_low) w |= 1u << (bb::SC_STEP_INV_LSB + a);
+    if (s.dir_reversed) w |= 1u << (bb::SC_DIR_INV_LSB + a);
+    if (!timed) {
+      w |= uint32_t(step_time_clocks(s.step_pulse_s, m.clock_hz)) << bb::SC_PW_LSB;
+      w |= uint32_t(step_time_clocks(s.dir_setup_s, m.clock_hz)) << bb::SC_SETUP_LSB;
+      timed = true;
+    }
+  }
+  return w;
+}
+
+void check_board(const MachineConfig& m, uint32_t info) {
+  const int naxes = bb::info_naxes(info);
+  if (int(m.axes.size()) > naxes)
+    throw InputError("machine config", m.source, "a board with " + std::to_string(m.axes.size()) + " axes",
+                     "the board was built with " + std::to_string(naxes));
+  for (int a = 0; a < int(m.axes.size()); ++a) {
+    const bool stepper = is_stepper(m, a);
+    const bool built = stepper ? (bb::info_steppers(info) >> a & 1) != 0 : bb::info_servo(info);
+    if (built) continue;
+    const std::string& name = m.axes[size_t(a)].name;
+    throw InputError(
+        "axis " + name + " (" + m.source + ")", stepper ? "a stepper axis" : "a servo axis",
+        std::string(stepper ? "a board built with a step generator on axis " + name
+                            : "a board built with the PID loops") +
+            build_hint(stepper),
+        "the board's INFO says it has " + std::string(stepper ? "no step generator there" : "no loops"));
+  }
+}
+
+void setup_axes(mc::host::BoardLink& l, const MachineConfig& m) {
+  check_board(m, l.read(br::INFO));
+  const uint32_t want = step_cfg_word(m);
+  if (l.read(br::STEP_CFG) != want) l.write_verify(br::STEP_CFG, want);
+}
+
+std::array<int64_t, 3> enable_machine_axes(mc::host::BoardLink& l, const MachineConfig& m,
+                                           const std::vector<int>& axes, const mc::host::Note& note) {
+  std::vector<int> servo;
+  for (int a : axes)
+    if (!is_stepper(m, a)) servo.push_back(a);
+  return servo.empty() ? mc::host::arm(l, note) : mc::host::enable_axes(l, servo, note);
+}
+
+void require_servo(const MachineConfig& m, int a, std::string_view command) {
+  if (!is_stepper(m, a)) return;
+  const std::string& name = m.axes[size_t(a)].name;
+  throw InputError("--axis", name, "a servo axis: " + std::string(command) + " works on a PID loop",
+                   "axis " + name + " is a stepper ([axis." + name + ".stepper] in " + m.source + ")");
+}
+
+void require_ready(mc::host::BoardLink& l, const MachineConfig& m, int a) {
+  if (!is_stepper(m, a)) mc::host::require_enabled(l, a);
+}
+
+}  // namespace mc::machine

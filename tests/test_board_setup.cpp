@@ -1,0 +1,100 @@
+// The board set up for the machine's axes (host/machine/board_setup.hpp):
+// STEP_CFG from [axis.N.stepper], and a board refused when it was not built
+// for the machine (INFO), with the make target that builds the right one.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "hls/board_regs.hpp"
+#include "host/base/errors.hpp"
+#include "host/machine/board_setup.hpp"
+#include "host/machine/machine_config.hpp"
+
+namespace mc::machine {
+namespace {
+
+namespace bb = board::bits;
+
+MachineConfig stepper_router() {
+  return load_machine(std::string(MC_SOURCE_DIR) + "/configs/stepper_router.toml");
+}
+
+// INFO of a three-axis board: the servo bitstream, the stepper one.
+constexpr uint32_t kServoInfo = bb::info_word(3, 9, board::proto::VERSION, 0, true, true);
+constexpr uint32_t kStepperInfo = bb::info_word(3, 9, board::proto::VERSION, 7, false, true);
+
+std::string refusal(const MachineConfig& m, uint32_t info) {
+  try {
+    check_board(m, info);
+  } catch (const host::InputError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+TEST(BoardSetup, StepCfgFromTheStepperTables) {
+  MachineConfig m = stepper_router();
+  // 2 us pulses and 1 us direction setup at 12 MHz: 24 and 12 clocks.
+  EXPECT_EQ(step_cfg_word(m), 7u | 24u << bb::SC_PW_LSB | 12u << bb::SC_SETUP_LSB);
+  m.axes[1].stepper->closed_loop = true;
+  m.axes[2].stepper->step_active_low = true;
+  m.axes[0].stepper->dir_reversed = true;
+  EXPECT_EQ(step_cfg_word(m), 7u | 1u << (bb::SC_CLOSED_LSB + 1) | 1u << (bb::SC_STEP_INV_LSB + 2) |
+                                  1u << bb::SC_DIR_INV_LSB | 24u << bb::SC_PW_LSB | 12u << bb::SC_SETUP_LSB);
+  // A time that is not a whole number of clocks rounds up: the driver gets
+  // at least what it asked for.
+  m.axes[0].stepper->step_pulse_s = 1.01e-6;
+  EXPECT_EQ(step_cfg_word(m) >> bb::SC_PW_LSB & 0x3F, 13u);
+  // A servo machine: no stepper bits, no timing.
+  EXPECT_EQ(step_cfg_word(default_machine()), 0u);
+}
+
+TEST(BoardSetup, TheBoardMustBeBuiltForTheMachine) {
+  EXPECT_EQ(refusal(default_machine(), kServoInfo), "");
+  EXPECT_EQ(refusal(stepper_router(), kStepperInfo), "");
+  // The Verilated board has both: it runs either machine.
+  const uint32_t both = bb::info_word(3, 9, board::proto::VERSION, 7, true, true);
+  EXPECT_EQ(refusal(default_machine(), both), "");
+  EXPECT_EQ(refusal(stepper_router(), both), "");
+
+  const std::string s = refusal(stepper_router(), kServoInfo);
+  EXPECT_NE(s.find("axis x"), std::string::npos) << s;
+  EXPECT_NE(s.find("make synth-stepper"), std::string::npos) << s;
+  const std::string v = refusal(default_machine(), kStepperInfo);
+  EXPECT_NE(v.find("PID loops"), std::string::npos) << v;
+  EXPECT_NE(v.find("make synth "), std::string::npos) << v;
+  // A generator on X and Y only: Z is refused by name.
+  const std::string z = refusal(stepper_router(), bb::info_word(3, 9, board::proto::VERSION, 3, false, true));
+  EXPECT_NE(z.find("axis z"), std::string::npos) << z;
+  // Fewer axes than the machine.
+  const std::string n = refusal(default_machine(), bb::info_word(2, 9, board::proto::VERSION, 0, true, true));
+  EXPECT_NE(n.find("built with 2"), std::string::npos) << n;
+}
+
+TEST(BoardSetup, StepperTimesBeyondTheRegisterAreRefusedWithTheLine) {
+  // STEP_CFG holds 63 clocks: 5.25 us at 12 MHz.
+  const std::string base = "[axis.x.stepper]\n";
+  for (const char* bad : {"step_pulse_s = 6e-6\n", "dir_setup_s = 1e-5\n", "closed_loop = 1\n"}) {
+    std::string toml;
+    {
+      std::ifstream in(std::string(MC_SOURCE_DIR) + "/configs/stepper_router.toml");
+      toml.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const size_t at = toml.find(base);
+    ASSERT_NE(at, std::string::npos);
+    toml.insert(at + base.size(), bad);
+    try {
+      parse_machine(toml, "router.toml");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const host::InputError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("router.toml:"), std::string::npos) << w;
+      EXPECT_NE(w.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos) << w;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mc::machine
