@@ -63,7 +63,9 @@ struct InProcessBoard {
   sim::VirtualBoard board{m};
   sim::BoardStream stream{board};
   host::BoardLink link{stream};
-  explicit InProcessBoard(machine::MachineConfig mc = machine::default_machine()) : m(std::move(mc)) { link.connect(); }
+  explicit InProcessBoard(machine::MachineConfig mc = machine::default_machine()) : m(std::move(mc)) {
+    link.connect();
+  }
 };
 
 class BoardRig {

@@ -50,7 +50,8 @@ std::vector<Const> constants() {
   c.push_back({"R_AX_END", long(reg::AX_END), 4});
 #define B(n) c.push_back({"B_" #n, long(bits::n), 0})
   c.push_back({"B_ID_MAGIC", long(bits::ID_MAGIC), 32});
-  B(INFO_NAXES_LSB), B(INFO_FIFO_AW_LSB), B(INFO_VERSION_LSB), B(INFO_STEPPERS_LSB), B(INFO_SERVO), B(INFO_HANDWHEEL);
+  B(INFO_NAXES_LSB), B(INFO_FIFO_AW_LSB), B(INFO_VERSION_LSB), B(INFO_STEPPERS_LSB), B(INFO_SERVO),
+      B(INFO_HANDWHEEL);
   B(ST_ARMED), B(ST_ESTOP_IN), B(ST_IP_BUSY), B(ST_IP_UNDERRUN), B(ST_IP_OVF), B(ST_LIMIT_IN_LSB),
       B(ST_DRV_EN_LSB), B(ST_PID_EN_LSB);
   B(F_WDOG), B(F_ESTOP), B(F_LIMIT_LSB), B(F_FERR_LSB), B(F_ENC_LSB);
