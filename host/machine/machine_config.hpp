@@ -62,6 +62,21 @@ struct PidConfig {
   double out_limit = 32767;
 };
 
+// [axis.N.home], optional: the axis's home switch, wired to its limit input
+// (which the board filters and can latch on, docs/board.md), and how the
+// homing cycle seeks it. Positions are table positions in the plant's frame,
+// the frame of travel_min_m/travel_max_m.
+struct HomeConfig {
+  double switch_m = 0;       // where the switch closes
+  int direction = 1;         // +1: closed at positions >= switch_m (the + end); -1: closed at <= switch_m
+  double bounce_s = 0.0005;  // the contacts chatter this long after each crossing
+  int order = 0;             // homing pass: axes of the same order home together, lowest first
+  // Grbl's defaults ($25, $24, $27): 500 mm/min, 25 mm/min, 1 mm.
+  double seek_m_s = 500e-3 / 60;   // fast approach, to find the switch
+  double locate_m_s = 25e-3 / 60;  // slow approach after backing off, the one whose latch counts
+  double pull_off_m = 0.001;       // how far the axis backs off the switch
+};
+
 struct AxisConfig {
   std::string name;
   MotorParams motor;
@@ -82,6 +97,7 @@ struct AxisConfig {
   double travel_min_m = -1.0;
   double travel_max_m = 1.0;
   std::optional<StepperConfig> stepper;  // a stepper axis (else a DC servo on the H-bridge pins)
+  std::optional<HomeConfig> home;        // no [home]: no switch on the axis's limit input
 };
 
 // [planner], optional (docs/gcode.md, "Planner"). Defaults as Grbl's.
@@ -107,6 +123,12 @@ struct WorkpieceConfig {
   int noise_seed = 1;
 };
 
+// [probe], optional: the probe input's contact (a touch plate or a probe
+// whose tip closes on the workpiece, [workpiece]).
+struct ProbeConfig {
+  double bounce_s = 0.0002;  // the contact chatters this long after each touch and lift
+};
+
 struct MachineConfig {
   std::string source;  // file path or "built-in default"
   double clock_hz = 12e6;
@@ -114,6 +136,7 @@ struct MachineConfig {
   std::vector<AxisConfig> axes;  // x, y, optional z, in that order
   PlannerSettings planner;
   std::optional<WorkpieceConfig> workpiece;
+  ProbeConfig probe;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;
