@@ -403,7 +403,33 @@ TEST(SimConfig, EveryShippedConfigLoads) {
     EXPECT_GE(m.axes.size(), 2u);
     ++n;
   }
-  EXPECT_GE(n, 2) << "default and stepper_router at least";
+  EXPECT_GE(n, 3) << "default, stepper_router and drill at least";
+}
+
+// configs/drill.toml: the source document's drill (seed 000) as its
+// section 6.11 computes it: 3200 steps per motor rev, belts 15:25 onto a
+// 7 mm screw on X and Z (760 steps/mm in the firmware, 761.9 exactly) and
+// 15:30 onto 10 mm on Y (640), 400 mm of travel, switches at the origin.
+TEST(SimConfig, TheDrillIsTheDocumentsMachine) {
+  const MachineConfig m = load_machine(std::string(MC_SOURCE_DIR) + "/configs/drill.toml");
+  ASSERT_EQ(m.axes.size(), 3u);
+  EXPECT_NEAR(counts_per_m(m.axes[0]) / 1e3, 3200.0 * 25 / 15 / 7, 1e-3);
+  EXPECT_NEAR(counts_per_m(m.axes[1]) / 1e3, 640.0, 1e-9);
+  EXPECT_NEAR(counts_per_m(m.axes[2]) / 1e3, 3200.0 * 25 / 15 / 7, 1e-3);
+  for (const AxisConfig& a : m.axes) {
+    SCOPED_TRACE(a.name);
+    ASSERT_TRUE(a.stepper && a.home);
+    EXPECT_EQ(a.stepper->steps_per_rev(), 3200);
+    EXPECT_NEAR(a.travel_max_m - a.travel_min_m, 0.4, 1e-12);
+    EXPECT_EQ(a.home->bounce_s, 0.0) << "the anti-bounce circuit";
+    // The firmware's FAST_SPEED, 10000 steps/s.
+    EXPECT_NEAR(a.max_speed_m_s * counts_per_m(a), 10000, 5);
+  }
+  EXPECT_EQ(m.axes[0].home->direction, -1);
+  EXPECT_EQ(m.axes[0].home->switch_m, m.axes[0].travel_min_m) << "the origin at the - end";
+  EXPECT_EQ(m.axes[1].home->direction, -1);
+  EXPECT_EQ(m.axes[2].home->direction, 1) << "Z homes up";
+  EXPECT_EQ(m.axes[2].home->switch_m, m.axes[2].travel_max_m);
 }
 
 }  // namespace
