@@ -354,7 +354,7 @@ TEST(SimConfig, HomeSwitchesAndTheProbe) {
 
   // Only switch_m and direction are required; a file without [probe] has its default.
   std::string text(default_machine_toml());
-  const auto from = text.find("\n", text.find("direction", text.find("[axis.y.home]"))) + 1;
+  const auto from = text.find('\n', text.find("direction", text.find("[axis.y.home]"))) + 1;
   text.erase(from, text.find("\n\n", from) + 1 - from);
   text.erase(text.find("\n[probe]") + 1);
   const MachineConfig d = parse_machine(text, "defaults.toml");

@@ -79,7 +79,8 @@ struct Rig {
   }
   // A straight move at feed (m/s along the path), queued; then board time
   // passes until the interpolator stands (at the end, or where a latch
-  // with LATCH.stop flushed the rest). False: still busy after max_s.
+  // with LATCH.stop flushed the rest). False: still busy after max_s of
+  // board time.
   bool move(const host::Vec3& to, double feed_m_s, double max_s = 5) {
     const auto segs = host::plan_move(at, to, feed_m_s * machine::counts_per_m(cfg.axes[0]), cfg.clock_hz);
     at = to;
@@ -92,7 +93,7 @@ struct Rig {
       else
         link.poll(std::chrono::milliseconds(1));
     }
-    for (double t = 0; t < max_s; t += 1e-3) {
+    for (const double end = board.board_seconds() + max_s; board.board_seconds() < end;) {
       const uint32_t ip = link.read(br::IP_STAT);
       if (!(ip >> bb::IS_BUSY & 1) && (ip & 0xFFFF) == 0) return true;
       link.poll(std::chrono::milliseconds(1));
