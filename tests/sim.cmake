@@ -5,6 +5,7 @@ target_link_libraries(test_sim_plant PRIVATE mc_plant)
 
 mc_gtest(test_sim_config unit test_sim_config.cpp)
 target_link_libraries(test_sim_config PRIVATE mc_plant)
+target_compile_definitions(test_sim_config PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
 
 mc_gtest(test_cli_plant unit test_cli_plant.cpp)
 target_link_libraries(test_cli_plant PRIVATE nlohmann_json::nlohmann_json)

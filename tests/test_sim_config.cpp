@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -166,7 +167,7 @@ TEST(SimConfig, AxisLookupIsCaseInsensitive) {
 TEST(SimConfig, OptionalZAxis) {
   // The built-in router without its Z tables: an XY table.
   std::string text(default_machine_toml());
-  for (const std::string t : {"", ".motor", ".drive", ".pid"}) {
+  for (const std::string t : {"", ".motor", ".drive", ".pid", ".home"}) {
     const auto from = text.find("[axis.z" + t + "]");
     ASSERT_NE(from, std::string::npos);
     const auto to = text.find("\n[", from + 1);
@@ -288,6 +289,8 @@ TEST(SimConfig, DefaultTravelStaysWithinTheCounters) {
   set("max_speed_m_s", "1e-5");          // within the interpolator's rate at this scale
   set("travel_min_m", "");
   set("travel_max_m", "");
+  const auto home = text.find("[axis.y.home]");  // its switch and speeds are for the real axis
+  text.erase(home, text.find("\n\n", home) + 1 - home);
   const MachineConfig m = parse_machine(text, "fine.toml");
   const double reach = 2147483647.0 / (16777216 / 0.001);
   EXPECT_DOUBLE_EQ(m.axes[1].travel_max_m, reach);
@@ -332,6 +335,101 @@ TEST(SimConfig, LoadFromFile) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
   }
+}
+
+// [axis.N.home] and [probe] (issue 17): the built-in machine's switches, the
+// defaults of the optional keys, and every bad value refused with its line.
+TEST(SimConfig, HomeSwitchesAndTheProbe) {
+  const MachineConfig m = default_machine();
+  for (const AxisConfig& a : m.axes) {
+    ASSERT_TRUE(a.home) << a.name;
+    EXPECT_EQ(a.home->direction, 1) << a.name << ": every switch at the + end";
+    EXPECT_GT(a.home->switch_m, 0) << a.name;
+    EXPECT_LT(a.home->switch_m, a.travel_max_m) << a.name << ": inside travel";
+    EXPECT_LE(a.home->locate_m_s, a.home->seek_m_s) << a.name;
+  }
+  EXPECT_EQ(m.axes[2].home->order, 0) << "Z homes first";
+  EXPECT_EQ(m.axes[0].home->order, 1);
+  EXPECT_EQ(m.probe.bounce_s, 0.0002);
+
+  // Only switch_m and direction are required; a file without [probe] has its default.
+  std::string text(default_machine_toml());
+  const auto from = text.find('\n', text.find("direction", text.find("[axis.y.home]"))) + 1;
+  text.erase(from, text.find("\n\n", from) + 1 - from);
+  text.erase(text.find("\n[probe]") + 1);
+  const MachineConfig d = parse_machine(text, "defaults.toml");
+  const HomeConfig& h = *d.axes[1].home;
+  EXPECT_EQ(h.switch_m, 0.29);
+  EXPECT_EQ(h.bounce_s, 0.0005);
+  EXPECT_EQ(h.order, 0);
+  EXPECT_DOUBLE_EQ(h.seek_m_s, 0.5 / 60);      // Grbl's $25, 500 mm/min
+  EXPECT_DOUBLE_EQ(h.locate_m_s, 0.025 / 60);  // $24, 25 mm/min
+  EXPECT_EQ(h.pull_off_m, 0.001);              // $27, 1 mm
+  EXPECT_EQ(d.probe.bounce_s, 0.0002);
+  // Without [home] an axis has no switch.
+  std::string none(default_machine_toml());
+  const auto z = none.find("[axis.z.home]");
+  none.erase(z, none.find("\n\n", z) - z);
+  EXPECT_FALSE(parse_machine(none, "none.toml").axes[2].home);
+
+  expect_error(insert_after("axis.x.home", "swich_m = 0.1"), "axis.x.home.swich_m",
+               "unknown key; expected one of: switch_m, direction, bounce_s");
+  expect_error(insert_after("probe", "debounce_s = 1"), "probe.debounce_s", "unknown key");
+  // `key = value` in `table` (no value: the line removed) is refused, naming the key.
+  const auto refused = [](const std::string& table, const std::string& key, const std::string& value,
+                          const std::string& mentions) {
+    expect_error(edit(table, key, value.empty() ? "" : key + " = " + value), table + "." + key, mentions);
+  };
+  refused("axis.x.home", "switch_m", "", "missing key");
+  refused("axis.x.home", "switch_m", "0.5", "within the axis's travel -0.3..0.3 m");
+  refused("axis.x.home", "direction", "0", "+1");
+  refused("axis.x.home", "direction", "2", "-1..1");
+  refused("axis.y.home", "bounce_s", "5", "up to 0.1");
+  refused("axis.y.home", "bounce_s", "-1e-3", "a number >= 0");
+  refused("axis.y.home", "order", "3", "0..2");
+  refused("axis.z.home", "seek_m_s", "1", "at most the axis's max_speed_m_s = 0.25 m/s");
+  refused("axis.z.home", "locate_m_s", "0.05", "at most seek_m_s = 0.01 m/s");
+  refused("axis.z.home", "pull_off_m", "0.2", "less than the axis's travel, 0.12 m");
+  refused("probe", "bounce_s", "0.5", "up to 0.1");
+}
+
+// Every machine file shipped in configs/ loads (make test parses each).
+TEST(SimConfig, EveryShippedConfigLoads) {
+  int n = 0;
+  for (const auto& f : std::filesystem::directory_iterator(std::string(MC_SOURCE_DIR) + "/configs")) {
+    if (f.path().extension() != ".toml") continue;
+    SCOPED_TRACE(f.path().string());
+    const MachineConfig m = load_machine(f.path().string());
+    EXPECT_GE(m.axes.size(), 2u);
+    ++n;
+  }
+  EXPECT_GE(n, 3) << "default, stepper_router and drill at least";
+}
+
+// configs/drill.toml: the source document's drill (seed 000) as its
+// section 6.11 computes it: 3200 steps per motor rev, belts 15:25 onto a
+// 7 mm screw on X and Z (760 steps/mm in the firmware, 761.9 exactly) and
+// 15:30 onto 10 mm on Y (640), 400 mm of travel, switches at the origin.
+TEST(SimConfig, TheDrillIsTheDocumentsMachine) {
+  const MachineConfig m = load_machine(std::string(MC_SOURCE_DIR) + "/configs/drill.toml");
+  ASSERT_EQ(m.axes.size(), 3u);
+  EXPECT_NEAR(counts_per_m(m.axes[0]) / 1e3, 3200.0 * 25 / 15 / 7, 1e-3);
+  EXPECT_NEAR(counts_per_m(m.axes[1]) / 1e3, 640.0, 1e-9);
+  EXPECT_NEAR(counts_per_m(m.axes[2]) / 1e3, 3200.0 * 25 / 15 / 7, 1e-3);
+  for (const AxisConfig& a : m.axes) {
+    SCOPED_TRACE(a.name);
+    ASSERT_TRUE(a.stepper && a.home);
+    EXPECT_EQ(a.stepper->steps_per_rev(), 3200);
+    EXPECT_NEAR(a.travel_max_m - a.travel_min_m, 0.4, 1e-12);
+    EXPECT_EQ(a.home->bounce_s, 0.0) << "the anti-bounce circuit";
+    // The firmware's FAST_SPEED, 10000 steps/s.
+    EXPECT_NEAR(a.max_speed_m_s * counts_per_m(a), 10000, 5);
+  }
+  EXPECT_EQ(m.axes[0].home->direction, -1);
+  EXPECT_EQ(m.axes[0].home->switch_m, m.axes[0].travel_min_m) << "the origin at the - end";
+  EXPECT_EQ(m.axes[1].home->direction, -1);
+  EXPECT_EQ(m.axes[2].home->direction, 1) << "Z homes up";
+  EXPECT_EQ(m.axes[2].home->switch_m, m.axes[2].travel_max_m);
 }
 
 }  // namespace

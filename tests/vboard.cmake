@@ -44,3 +44,9 @@ target_compile_definitions(test_link_soak PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_
 mc_gtest(test_vboard_stepper system test_vboard_stepper.cpp)
 target_link_libraries(test_vboard_stepper PRIVATE mc_motion mc_vboard)
 target_compile_definitions(test_vboard_stepper PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+
+# The board's machine I/O on the virtual board: home switches and the probe
+# (bounce, latches), the spindle and coolant recorded, twin against RTL.
+mc_gtest(test_vboard_io system test_vboard_io.cpp)
+target_link_libraries(test_vboard_io PRIVATE mc_motion mc_vboard)
+target_compile_definitions(test_vboard_io PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

@@ -96,13 +96,23 @@ class Reader {
 
   // A key added after the first release: files written before it keep
   // loading, with the documented default (configs/default.toml names it).
-  double number_or(std::string_view key, double fallback, Range r, std::string_view unit) {
+  double number_or(std::string_view key, double fallback, Range r, std::string_view unit,
+                   double hi = std::numeric_limits<double>::infinity(), std::string_view why = {}) {
     if (!has(key)) {
       used_.insert(std::string(key));
       order_.emplace_back(key);
       return fallback;
     }
-    return number(key, r, unit);
+    return number(key, r, unit, hi, why);
+  }
+
+  int integer_or(std::string_view key, int fallback, int lo, int hi, std::string_view unit) {
+    if (!has(key)) {
+      used_.insert(std::string(key));
+      order_.emplace_back(key);
+      return fallback;
+    }
+    return integer(key, lo, hi, unit);
   }
 
   int integer(std::string_view key, int lo, int hi, std::string_view unit) {
@@ -208,6 +218,51 @@ class Reader {
   std::set<std::string> used_;
   std::vector<std::string> order_;  // keys asked for, in order, for "expected one of"
 };
+
+// A mechanical contact settles within milliseconds: beyond this a bounce
+// time is a value in the wrong unit.
+constexpr double kMaxBounceS = 0.1;
+constexpr const char* kBounceWhy = "a contact settles within milliseconds";
+
+// The axis's travel and top speed are read: the switch must lie where the
+// homing cycle can drive to it, at speeds the axis may run.
+HomeConfig read_home(Reader r, const AxisConfig& a) {
+  HomeConfig h;
+  h.switch_m = r.number("switch_m", Range::any, "m");
+  if (h.switch_m < a.travel_min_m || h.switch_m > a.travel_max_m)
+    throw r.error("switch_m", format_number(h.switch_m),
+                  "a position within the axis's travel " + format_number(a.travel_min_m) + ".." +
+                      format_number(a.travel_max_m) + " m (travel_min_m..travel_max_m)");
+  h.direction = r.integer("direction", -1, 1, "+1: closed at >= switch_m, -1: closed at <= switch_m");
+  if (h.direction == 0) throw r.error("direction", "0", "+1 (the switch at the + end) or -1 (at the - end)");
+  h.bounce_s = r.number_or("bounce_s", h.bounce_s, Range::non_negative, "s", kMaxBounceS, kBounceWhy);
+  h.order = r.integer_or("order", h.order, 0, kBoardAxes - 1, "homing pass: one per axis at most");
+  h.seek_m_s = r.number_or("seek_m_s", h.seek_m_s, Range::positive, "m/s");
+  if (h.seek_m_s > a.max_speed_m_s)
+    throw r.error("seek_m_s", format_number(h.seek_m_s),
+                  "at most the axis's max_speed_m_s = " + format_number(a.max_speed_m_s) + " m/s",
+                  "above the range");
+  h.locate_m_s = r.number_or("locate_m_s", std::min(h.locate_m_s, h.seek_m_s), Range::positive, "m/s");
+  if (h.locate_m_s > h.seek_m_s)
+    throw r.error("locate_m_s", format_number(h.locate_m_s),
+                  "at most seek_m_s = " + format_number(h.seek_m_s) +
+                      " m/s (the second approach is the slow, precise one)",
+                  "above the range");
+  h.pull_off_m = r.number_or("pull_off_m", h.pull_off_m, Range::positive, "m");
+  if (h.pull_off_m >= a.travel_max_m - a.travel_min_m)
+    throw r.error("pull_off_m", format_number(h.pull_off_m),
+                  "less than the axis's travel, " + format_number(a.travel_max_m - a.travel_min_m) + " m",
+                  "above the range");
+  r.finish();
+  return h;
+}
+
+ProbeConfig read_probe(Reader r) {
+  ProbeConfig p;
+  p.bounce_s = r.number_or("bounce_s", p.bounce_s, Range::non_negative, "s", kMaxBounceS, kBounceWhy);
+  r.finish();
+  return p;
+}
 
 MotorParams read_motor(Reader r) {
   MotorParams m{};
@@ -332,6 +387,7 @@ AxisConfig read_axis(Reader r, const std::string& name, double clock_hz) {
   if (!(a.travel_min_m < a.travel_max_m))
     throw r.error("travel_max_m", format_number(a.travel_max_m),
                   "travel_max_m > travel_min_m = " + format_number(a.travel_min_m));
+  if (r.has("home")) a.home = read_home(r.table("home"), a);
   a.motor = read_motor(r.table("motor"));
   a.drive = read_drive(r.table("drive"), clock_hz);
   a.pid = read_pid(r.table("pid"), clock_hz);
@@ -434,6 +490,7 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
   }
   if (top.has("planner")) m.planner = read_planner(top.table("planner"));
   if (top.has("workpiece")) m.workpiece = read_workpiece(top.table("workpiece"));
+  if (top.has("probe")) m.probe = read_probe(top.table("probe"));
   Reader axes = top.table("axis");
   const std::vector<std::string> names = {"x", "y", "z"};
   for (const std::string& k : axes.keys()) {

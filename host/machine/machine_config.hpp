@@ -75,6 +75,21 @@ struct PidConfig {
   double out_limit = 32767;
 };
 
+// [axis.N.home], optional: the axis's home switch, wired to its limit input
+// (which the board filters and can latch on, docs/board.md), and how the
+// homing cycle seeks it. Positions are table positions in the plant's frame,
+// the frame of travel_min_m/travel_max_m.
+struct HomeConfig {
+  double switch_m = 0;       // where the switch closes
+  int direction = 1;         // +1: closed at positions >= switch_m (the + end); -1: closed at <= switch_m
+  double bounce_s = 0.0005;  // the contacts chatter this long after each crossing
+  int order = 0;             // homing pass: axes of the same order home together, lowest first
+  // Grbl's defaults ($25, $24, $27): 500 mm/min, 25 mm/min, 1 mm.
+  double seek_m_s = 500e-3 / 60;   // fast approach, to find the switch
+  double locate_m_s = 25e-3 / 60;  // slow approach after backing off, the one whose latch counts
+  double pull_off_m = 0.001;       // how far the axis backs off the switch
+};
+
 struct AxisConfig {
   std::string name;
   MotorParams motor;
@@ -89,6 +104,8 @@ struct AxisConfig {
   double max_speed_m_s;          // jog, move and the planner refuse feeds above it
   // Optional keys (older files load with these defaults).
   double max_accel_m_s2 = 1.0;  // path planner: the axis's acceleration limit
+  // The home switch; no [home]: none on the axis's limit input.
+  std::optional<HomeConfig> home;
   // Soft travel limits: machine coordinates the axis may reach (m from where
   // it was when the board started; no homing yet). jog, move and step refuse
   // targets beyond them before anything moves.
@@ -120,6 +137,12 @@ struct WorkpieceConfig {
   int noise_seed = 1;
 };
 
+// [probe], optional: the probe input's contact (a touch plate or a probe
+// whose tip closes on the workpiece, [workpiece]).
+struct ProbeConfig {
+  double bounce_s = 0.0002;  // the contact chatters this long after each touch and lift
+};
+
 struct MachineConfig {
   std::string source;  // file path or "built-in default"
   double clock_hz = 12e6;
@@ -127,6 +150,7 @@ struct MachineConfig {
   std::vector<AxisConfig> axes;  // x, y, optional z, in that order
   PlannerSettings planner;
   std::optional<WorkpieceConfig> workpiece;
+  ProbeConfig probe;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;

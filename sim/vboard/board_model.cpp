@@ -1,5 +1,7 @@
 #include "sim/vboard/board_model.hpp"
 
+#include <algorithm>
+
 #include "Vmotioncore_icebreaker.h"
 #include "Vmotioncore_icebreaker___024root.h"
 #include "verilated.h"
@@ -19,11 +21,12 @@ class TwinBoard final : public BoardModel {
           const int32_t high = int32_t(b_.pwm_high_in(a, n));
           drive[a] += b_.dir(a) ? -high : high;
         }
-      b_.advance(p, n);
+      advance(p, n);
       return n;
     }
     b_.step(p);
     ++stepped_;
+    sp_high_ += b_.sp_pwm();
     // seg_wr_o and the word it writes, registered: the queue takes them at the next edge.
     const auto& regs = b_.u_board.u_regs;
     if (seg_tap_ && regs.r.seg_wr_o) seg_tap_->push_back(regs.data_o());
@@ -41,9 +44,33 @@ class TwinBoard final : public BoardModel {
     const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
     return b_.dir(a) ? -high : high;
   }
-  void advance(const IcebreakerPins& p, uint32_t n) override { b_.advance(p, n); }
+  void advance(const IcebreakerPins& p, uint32_t n) override {
+    sp_high_ += sp_high_in(n);
+    b_.advance(p, n);
+  }
+  bool sp_pwm() const override { return b_.sp_pwm(); }
+  bool sp_en() const override { return b_.sp_en(); }
+  bool sp_dir() const override { return b_.sp_dir(); }
+  bool flood() const override { return b_.flood(); }
 
  private:
+  // Of the next n clocks of a quiet stretch, those after which SP_PWM is
+  // high. mc_io's pin after an edge is "counter < duty" of the clock
+  // before (always high at duty 1023) while the spindle is on, and a quiet
+  // stretch holds sp_en_o at "armed and on" and the duty.
+  uint64_t sp_high_in(uint32_t n) const {
+    const auto& r = b_.u_board.u_io.r;
+    constexpr uint32_t kPeriod = 1024;  // the 10-bit counter
+    if (!r.sp_en_o || r.duty == 0) return 0;
+    if (r.duty == kPeriod - 1) return n;
+    const uint32_t d = r.duty, from = r.pcnt, rest = n % kPeriod;
+    // Counter values below the duty in [a, b), within one period.
+    const auto below = [d](uint32_t a, uint32_t b) { return a < d ? std::min(b, d) - a : 0u; };
+    const uint32_t tail = from + rest <= kPeriod ? below(from, from + rest)
+                                                 : below(from, kPeriod) + below(0, from + rest - kPeriod);
+    return uint64_t(n / kPeriod) * d + tail;
+  }
+
   // Built as the Verilated top is (sim/vboard/CMakeLists.txt): a step
   // generator on every axis, STEP_CFG choosing which axes use it.
   MotioncoreIcebreaker<kBoardAxes, 12'000'000, 1'000'000, true, MC_VBOARD_STEPPERS> b_;
@@ -89,9 +116,14 @@ class RtlBoard final : public BoardModel {
       seg_tap_->push_back(t.rootp->motioncore_icebreaker__DOT__u_board__DOT__u_regs__DOT__data);
     for (int a = 0; a < kBoardAxes; ++a)
       if (t.DRV_EN && *drv_[a].pwm) drive[a] += *drv_[a].dir ? -1 : 1;
+    sp_high_ += t.SP_PWM;
     return 1;
   }
   bool tx() const override { return top_->TX; }
+  bool sp_pwm() const override { return top_->SP_PWM; }
+  bool sp_en() const override { return top_->SP_EN; }
+  bool sp_dir() const override { return top_->SP_DIR; }
+  bool flood() const override { return top_->FLOOD; }
   bool drv_en() const override { return top_->DRV_EN; }
   bool pwm(int a) const override { return *drv_[a].pwm; }
   bool dir(int a) const override { return *drv_[a].dir; }

@@ -34,6 +34,15 @@ class BoardModel {
   // An axis's PWM (STEP on a stepper axis) and DIR pins.
   virtual bool pwm(int axis) const = 0;
   virtual bool dir(int axis) const = 0;
+  // The spindle and coolant pins: SP_PWM, SP_EN, SP_DIR (or mist) and FLOOD.
+  virtual bool sp_pwm() const = 0;
+  virtual bool sp_en() const = 0;
+  virtual bool sp_dir() const = 0;
+  virtual bool flood() const = 0;
+  // The clocks after whose edge SP_PWM was high, since power-up: the twin
+  // counts them through the stretches it skips (its pin shows only the
+  // last clock of one), so that the spindle's duty is exact on both engines.
+  uint64_t sp_high_clocks() const { return sp_high_; }
   // The twin's fast-forward over many plant steps (the RTL: none): how many
   // of the next clocks (up to limit) with the pins held change nothing but
   // counters; the drive of axis a over the clocks [from, from + n) of such a
@@ -49,7 +58,7 @@ class BoardModel {
   void tap_segments(std::vector<uint32_t>* words) { seg_tap_ = words; }
 
  protected:
-  uint64_t stepped_ = 0;
+  uint64_t stepped_ = 0, sp_high_ = 0;
   std::vector<uint32_t>* seg_tap_ = nullptr;
 };
 

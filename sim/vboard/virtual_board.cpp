@@ -15,9 +15,11 @@
 #include <stdexcept>
 
 #include "host/base/errors.hpp"
+#include "host/machine/workpiece.hpp"
 #include "sim/plant/dc_motor.hpp"
 #include "sim/plant/stepper_motor.hpp"
 #include "sim/vboard/board_model.hpp"
+#include "sim/vboard/contact.hpp"
 #include "sim/vboard/uart_model.hpp"
 
 namespace mc::sim {
@@ -59,6 +61,7 @@ struct VirtualBoard::Impl {
     std::unique_ptr<StepperPlant> stepper;
     int cpr = 0;
     double supply_v = 0;
+    double start_m = 0;                            // where the table stood at power-up (start_at)
     int64_t shown = 0, emit_from = 0, emit_n = 0;  // encoder edges of the current step
     int64_t steps = 0;                             // the stepper driver's STEP count
     bool step_pin = false;                         // STEP after the last clock
@@ -66,6 +69,7 @@ struct VirtualBoard::Impl {
     int64_t encoder_count() const { return plant ? plant->encoder_count() : stepper->position_steps(); }
     bool still() const { return plant ? plant->stuck() : stepper->speed_rad_s() == 0; }
     double position_m() const { return plant ? plant->position_m() : stepper ? stepper->position_m() : 0; }
+    double table_m() const { return start_m + position_m(); }
     // A STEP edge in the clocks just run (the pins held through a stretch
     // of more than one: a stepping generator is never skipped over).
     void watch_step(bool step, bool dir) {
@@ -102,12 +106,76 @@ struct VirtualBoard::Impl {
       s.shown = s.encoder_count();
       ++naxes;
     }
+    // Each contact bounces its own way, the same on every engine for a seed.
+    const uint64_t seed_base = uint64_t(seed) << 8;
+    for (int a = 0; a < naxes; ++a)
+      if (const auto& h = m.axes[size_t(a)].home)
+        lim[a] = Contact(bounce_steps(h->bounce_s), seed_base + uint64_t(a) + 1);
+    has_probe = m.workpiece && naxes == kBoardAxes;
+    if (has_probe) probe = Contact(bounce_steps(m.probe.bounce_s), seed_base + kBoardAxes + 1);
+    settle_contacts();
     for (int a = 0; a < kBoardAxes; ++a) {
       const Slot& s = slot[a];
       const QuadPins q = quadrature_pins(s.shown, s.present() ? s.cpr : 1 << 30);
       pins.enc_a[a] = q.a;
       pins.enc_b[a] = q.b;
     }
+  }
+
+  uint32_t bounce_steps(double s) const { return uint32_t(std::llround(s / m.plant_dt_s)); }
+  bool has_home(int a) const { return a < naxes && m.axes[size_t(a)].home.has_value(); }
+
+  // Whether each switch is truly closed where the tables are now.
+  bool home_closed(int a) const {
+    const machine::HomeConfig& h = *m.axes[size_t(a)].home;
+    const double x = slot[a].table_m();
+    return h.direction > 0 ? x >= h.switch_m : x <= h.switch_m;
+  }
+  bool probe_closed() const {
+    const double x = slot[0].table_m() * 1e3, y = slot[1].table_m() * 1e3;
+    if (x != face_x || y != face_y) {  // the tables mostly stand, or move in Z alone
+      face_x = x;
+      face_y = y;
+      face_z = machine::surface_z_mm(*m.workpiece, x, y);
+    }
+    return slot[2].table_m() * 1e3 <= face_z;
+  }
+  void show_contacts() {
+    for (int a = 0; a < kBoardAxes; ++a) pins.lim[a] = has_home(a) && lim[a].pin();
+    pins.probe = has_probe && probe.pin();
+  }
+  void settle_contacts() {
+    for (int a = 0; a < naxes; ++a)
+      if (has_home(a)) lim[a].settle(home_closed(a));
+    if (has_probe) probe.settle(probe_closed());
+    show_contacts();
+  }
+  // At a plant-step boundary: the switches where the tables are.
+  void step_contacts() {
+    for (int a = 0; a < naxes; ++a)
+      if (has_home(a)) lim[a].step(home_closed(a));
+    if (has_probe) probe.step(probe_closed());
+    show_contacts();
+  }
+  // No switch pin will change at the next boundary: none bouncing, none crossed.
+  bool contacts_quiet() const {
+    for (int a = 0; a < naxes; ++a)
+      if (has_home(a) && (lim[a].bouncing() || lim[a].closed() != home_closed(a))) return false;
+    return !has_probe || (!probe.bouncing() && probe.closed() == probe_closed());
+  }
+
+  // The spindle and coolant pins after edge `now` (a stepped clock: they
+  // hold through skipped ones): a change is logged with SP_PWM's high
+  // clocks over the edges since the change before, up to this one.
+  void watch_spindle(uint64_t now) {
+    const VirtualBoard::SpindleState st{board->sp_en(), board->sp_dir(), board->flood()};
+    if (st == spindle) return;
+    // The pins after this edge are the new state's: so is SP_PWM's level.
+    const uint64_t high = board->sp_high_clocks() - board->sp_pwm();
+    spindle_log.push_back({now, st, high - high_since, now - spindle_since});
+    spindle = st;
+    spindle_since = now;
+    high_since = high;
   }
 
   // Encoder edges of this step: the count the plant reached, at most one
@@ -127,6 +195,7 @@ struct VirtualBoard::Impl {
   // host line's bit edges), then the plants with the drive's mean over the
   // step.
   void plant_step(std::vector<uint8_t>& out) {
+    step_contacts();
     plan_edges();
     uint32_t edges_until = 0;  // clocks in which some encoder pin still changes
     for (int a = 0; a < naxes; ++a)
@@ -159,6 +228,7 @@ struct VirtualBoard::Impl {
       rx.clock_n(board->tx(), n);
       tx.clock_n(n);
       c += n;
+      watch_spindle(cycles + c);
     }
     active = active || !tx.idle() || rx.busy() || rx.has_byte();
     while (rx.has_byte()) out.push_back(rx.take());
@@ -175,9 +245,12 @@ struct VirtualBoard::Impl {
   // plants still take every step, with the drive the clock-by-clock path
   // would count (the PWM pins follow their counters), so positions and
   // bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs). It stops
-  // after the step in which an encoder count changes.
+  // after the step in which an encoder count changes or a switch is
+  // crossed, and never starts while one bounces: the switch pins change
+  // only in plant_step(). The spindle and coolant pins hold (SP_PWM aside,
+  // whose high clocks the board model counts).
   bool jump(uint64_t steps) {
-    if (!tx.idle() || rx.busy() || rx.has_byte()) return false;
+    if (!tx.idle() || rx.busy() || rx.has_byte() || !contacts_quiet()) return false;
     for (int a = 0; a < naxes; ++a)
       if (slot[a].encoder_count() != slot[a].shown) return false;
     pins.rx = tx.pin();
@@ -192,6 +265,7 @@ struct VirtualBoard::Impl {
         s.plant_step(s.plant ? board->idle_drive(a, uint32_t(j * k), k) : 0, k, enabled);
         edge = edge || s.encoder_count() != s.shown;
       }
+      edge = edge || !contacts_quiet();
       ++j;
     }
     board->advance(pins, uint32_t(j * k));
@@ -211,6 +285,16 @@ struct VirtualBoard::Impl {
   UartSender tx;
   UartReceiver rx;
   uint64_t cycles = 0, last_activity = 0;
+  // The switches: each home switch on its axis's limit pin, the probe.
+  Contact lim[kBoardAxes], probe;
+  bool has_probe = false;
+  // surface_z_mm at the last X, Y asked: a cache, so mutable.
+  mutable double face_x = std::nan(""), face_y = std::nan(""), face_z = 0;
+  // The spindle and coolant: the pins now, their changes, and where the
+  // interval since the last change began (clock, SP_PWM high clocks).
+  VirtualBoard::SpindleState spindle;
+  std::vector<VirtualBoard::SpindleEvent> spindle_log;
+  uint64_t spindle_since = 0, high_since = 0;
 };
 
 VirtualBoard::VirtualBoard(const MachineConfig& m, uint32_t seed, BoardEngine e)
@@ -250,7 +334,7 @@ uint64_t VirtualBoard::link_quiet_clocks() const {
   return impl_->cycles - impl_->last_activity;
 }
 bool VirtualBoard::dormant() const {
-  if (link_quiet_clocks() <= kMaxWatchdogClocks) return false;
+  if (link_quiet_clocks() <= kMaxWatchdogClocks || !impl_->contacts_quiet()) return false;
   for (int a = 0; a < kBoardAxes; ++a) {
     const auto& s = impl_->slot[a];
     if (impl_->board->drv_en() || (s.present() && !s.still())) return false;
@@ -258,7 +342,35 @@ bool VirtualBoard::dormant() const {
   return true;
 }
 double VirtualBoard::position_m(int axis) const {
-  return impl_->slot[axis].position_m();
+  return impl_->slot[axis].table_m();
+}
+void VirtualBoard::start_at(int axis, double table_m) {
+  if (impl_->cycles != 0) throw std::logic_error("VirtualBoard::start_at: the board has run already");
+  if (axis < 0 || axis >= impl_->naxes)
+    throw std::logic_error("VirtualBoard::start_at: axis " + std::to_string(axis) + " is not configured");
+  impl_->slot[axis].start_m = table_m;
+  impl_->settle_contacts();
+}
+bool VirtualBoard::limit_pin(int axis) const {
+  return impl_->pins.lim[axis];
+}
+bool VirtualBoard::probe_pin() const {
+  return impl_->pins.probe;
+}
+uint64_t VirtualBoard::limit_edges(int axis) const {
+  return impl_->lim[axis].edges();
+}
+uint64_t VirtualBoard::probe_edges() const {
+  return impl_->probe.edges();
+}
+VirtualBoard::SpindleState VirtualBoard::spindle_state() const {
+  return impl_->spindle;
+}
+const std::vector<VirtualBoard::SpindleEvent>& VirtualBoard::spindle_log() const {
+  return impl_->spindle_log;
+}
+uint64_t VirtualBoard::spindle_high_clocks() const {
+  return impl_->board->sp_high_clocks();
 }
 bool VirtualBoard::drive_enabled(int /*axis*/) const {
   return impl_->board->drv_en();  // one DRV_EN pin for every driver

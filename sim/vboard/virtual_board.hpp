@@ -16,8 +16,16 @@
 // the co-simulation does. A stepper axis ([axis.N.stepper]) has a driver
 // on its STEP/DIR pins instead: each rising STEP edge is a step in DIR's
 // direction, and the shaft's encoder shows the rotor in step units.
-// An axis the config does not describe keeps its encoder still; the limit,
-// e-stop and handwheel inputs stay inactive.
+// An axis the config does not describe keeps its encoder still.
+//
+// Switches (sim/vboard/contact.hpp): an axis with [axis.N.home] shows its
+// home switch on its limit pin, high while the table is at or beyond
+// switch_m in the switch's direction; the probe pin is high while the Z
+// axis's tool tip is at or below the [workpiece] face (surface_z_mm) under
+// it. Both change at plant-step boundaries and bounce for their bounce_s
+// after each change. The e-stop and handwheel inputs stay inactive.
+// Outputs: every change of SP_EN, SP_DIR or FLOOD is logged at its clock,
+// with SP_PWM's high clocks since the change before (spindle_log()).
 #pragma once
 
 #include <atomic>
@@ -75,10 +83,11 @@ class VirtualBoard {
   uint64_t link_quiet_clocks() const;
   // Nothing observable can change by itself: the link has been quiet for
   // longer than any watchdog period (so the drives are off), every drive
-  // pin is off and every plant stands still.
+  // pin is off, every plant stands still and no switch is bouncing.
   bool dormant() const;
 
-  // For status lines: the plants' table positions, m, and whether each drive is on.
+  // For status lines: the plants' table positions, m (the plant's frame:
+  // start_at() plus the distance moved), and whether each drive is on.
   double position_m(int axis) const;
   bool drive_enabled(int axis) const;
   int configured_axes() const;
@@ -87,6 +96,42 @@ class VirtualBoard {
   // StepperPlant::lost_full_steps). 0 on a servo axis.
   int64_t driver_steps(int axis) const;
   int64_t lost_full_steps(int axis) const;
+  // Before the first run(): the table of `axis` stands at table_m (the
+  // plant's frame, that of travel_min_m/travel_max_m and switch_m) instead
+  // of 0. The encoder still counts from 0 there: POS counts from power-up,
+  // wherever the table is (the host keeps the offset). Throws
+  // std::logic_error once the board has run.
+  void start_at(int axis, double table_m);
+  // The switch pins as the board sees them now, and how often each has
+  // changed (bounces included). An axis without [home], or a machine
+  // without a probe ([workpiece] and a Z axis), keeps its pin low.
+  bool limit_pin(int axis) const;
+  bool probe_pin() const;
+  uint64_t limit_edges(int axis) const;
+  uint64_t probe_edges() const;
+
+  // The spindle and coolant outputs.
+  struct SpindleState {
+    bool on = false;       // SP_EN
+    bool reverse = false;  // SP_DIR (or mist with IO_CTRL.mist_on_dir)
+    bool flood = false;    // FLOOD
+    bool operator==(const SpindleState&) const = default;
+  };
+  struct SpindleEvent {
+    uint64_t clock = 0;  // the board clock after whose edge the pins show `state`
+    SpindleState state;
+    // SP_PWM over the clocks since the event before (or power-up): the
+    // clocks after whose edge it was high, of all of them.
+    uint64_t pwm_high = 0, pwm_clocks = 0;
+    double duty() const { return pwm_clocks ? double(pwm_high) / double(pwm_clocks) : 0; }
+    bool operator==(const SpindleEvent&) const = default;
+  };
+  SpindleState spindle_state() const;
+  const std::vector<SpindleEvent>& spindle_log() const;
+  // SP_PWM's high clocks since power-up (both engines count every clock,
+  // the twin's skipped ones included).
+  uint64_t spindle_high_clocks() const;
+
   // For link checks: appends to *words every 32-bit word the board writes
   // into its segment queue, in order, as it writes it (10 per segment,
   // hls/interp_seg.hpp); nullptr stops. Both engines.
