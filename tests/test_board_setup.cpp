@@ -11,6 +11,7 @@
 #include "host/base/errors.hpp"
 #include "host/machine/board_setup.hpp"
 #include "host/machine/machine_config.hpp"
+#include "host/machine/spindle.hpp"
 
 namespace mc::machine {
 namespace {
@@ -93,6 +94,57 @@ TEST(BoardSetup, StepperTimesBeyondTheRegisterAreRefusedWithTheLine) {
       EXPECT_NE(w.find("router.toml:"), std::string::npos) << w;
       EXPECT_NE(w.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos) << w;
     }
+  }
+}
+
+// Grbl's $30/$31 mapping: linear from min_rpm (duty 0) to max_rpm (1023).
+TEST(Spindle, DutyFromTheSWord) {
+  SpindleConfig c;  // 0..24000 rpm
+  EXPECT_EQ(spindle_duty(c, 0), 0u);
+  EXPECT_EQ(spindle_duty(c, 12000), 512u);  // 511.5 rounds up
+  EXPECT_EQ(spindle_duty(c, 24000), 1023u);
+  EXPECT_EQ(spindle_duty(c, 30000), 1023u);
+  c.min_rpm = 6000;
+  EXPECT_EQ(spindle_duty(c, 3000), 0u);
+  EXPECT_EQ(spindle_duty(c, 15000), 512u);
+}
+
+TEST(Spindle, ProgramActionsSetIoCtrl) {
+  namespace gc = mc::gcode;
+  SpindleConfig c;
+  SpindleState s;
+  s.apply(gc::StartSpindle{false, 12000});
+  s.apply(gc::SetCoolant{false, true});
+  EXPECT_EQ(io_ctrl_word(c, s),
+            1u << bb::IO_SPINDLE | 1u << bb::IO_SPINDLE_REV | 1u << bb::IO_FLOOD | 512u << bb::IO_DUTY_LSB);
+  EXPECT_EQ(io_ctrl_word(c, s, 0.5) >> bb::IO_DUTY_LSB, 256u) << "the override scales the speed";
+  s.apply(gc::SetSpindleSpeed{24000});
+  EXPECT_EQ(io_ctrl_word(c, s) >> bb::IO_DUTY_LSB, 1023u);
+  s.apply(gc::ChangeTool{2});  // M6 stops the spindle, not the coolant
+  EXPECT_EQ(io_ctrl_word(c, s), 1u << bb::IO_FLOOD);
+  s.apply(gc::StartSpindle{true, 6000});
+  s.apply(gc::ProgramStop{gc::StopKind::end});  // M2: everything off
+  EXPECT_EQ(io_ctrl_word(c, s), 0u);
+  c.mist_on_dir = true;
+  s.apply(gc::SetCoolant{true, false});
+  EXPECT_EQ(io_ctrl_word(c, s), 1u << bb::IO_MIST | 1u << bb::IO_MIST_ON_DIR);
+}
+
+TEST(Spindle, ConfigIsReadAndChecked) {
+  std::string toml;
+  {
+    std::ifstream in(std::string(MC_SOURCE_DIR) + "/configs/default.toml");
+    toml.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  EXPECT_EQ(parse_machine(toml, "m.toml").spindle.max_rpm, 24000);
+  const size_t at = toml.find("min_rpm = 0.0");
+  ASSERT_NE(at, std::string::npos);
+  toml.replace(at, 13, "min_rpm = 30000");
+  try {
+    parse_machine(toml, "m.toml");
+    ADD_FAILURE() << "min_rpm above max_rpm was accepted";
+  } catch (const host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("min_rpm < max_rpm"), std::string::npos) << e.what();
   }
 }
 

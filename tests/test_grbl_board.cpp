@@ -204,6 +204,9 @@ TEST(GrblBoard, StepperRouterRunsAJobWithEveryStepSent) {
   EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
   ASSERT_TRUE(rig.run_until_state("Idle", 20));
   EXPECT_EQ(rig.link().read(br::STEP_CFG), machine::step_cfg_word(rig.machine()));
+  // No gains were loaded, but the sample period is the machine's ts_s
+  // (1e-4 s: 1200 clocks), not the power-up sweep time.
+  EXPECT_EQ(rig.link().read(mc::pid_reg::addr(mc::pid_reg::GLOBAL_AXIS, mc::pid_reg::G_TS)), 1200u);
   constexpr int64_t kEnd[3] = {400, 800, -100};
   for (int a = 0; a < 3; ++a) {
     EXPECT_EQ(rig.link().read(mc::pid_reg::addr(uint8_t(a), mc::pid_reg::CTRL)) & 1, 0u) << "axis " << a;
@@ -326,6 +329,45 @@ TEST(GrblBoard, SpindleAndCoolantAreRecordedInOrder) {
   rig.send("M30\n");
   ASSERT_TRUE(rig.run_until([&] { return rig.out().find("[MSG:Pgm End]") != std::string::npos; }, 2));
   EXPECT_EQ(rig.status().rpm, 0);
+}
+
+// The program's spindle and coolant reach the board's pins: SP_EN, SP_DIR,
+// FLOOD, and SP_PWM at the duty of the S word (the default machine's
+// max_rpm 24000: S12000 is duty 512 of 1023, high 512 clocks in every
+// 1024), after the move before them; the override scales the duty; M5 M9
+// and a soft reset turn them off, and the next line's rearm does not bring
+// them back.
+TEST(GrblBoard, SpindleAndCoolantDriveTheBoardsPins) {
+  BoardRig rig;
+  using S = sim::VirtualBoard::SpindleState;
+  rig.send("G1 X2 F600\nM4 S12000\nM8\n");
+  EXPECT_EQ(rig.board().spindle_state(), S{});
+  ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state().flood; }, 3));
+  EXPECT_GT(rig.status().mpos[0], 2 - 3 * kCount) << "not before the move before it";
+  EXPECT_EQ(rig.board().spindle_state(), (S{true, true, true}));
+  // The duty over 0.1 s of whole PWM periods (1024 clocks), give or take
+  // the period the window cuts.
+  const auto duty_over = [&](double s) {
+    const uint64_t h0 = rig.board().spindle_high_clocks(), c0 = rig.board().cycles();
+    rig.run_for(s);
+    return double(rig.board().spindle_high_clocks() - h0) / double(rig.board().cycles() - c0);
+  };
+  EXPECT_NEAR(duty_over(0.1), 512.0 / 1024, 1024.0 / 1.2e6);
+  rig.send("\x9B");  // spindle override -10 %: S10800, duty 460
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().rpm == 10800; }, 1));
+  rig.run_for(0.01);
+  EXPECT_NEAR(duty_over(0.1), 460.0 / 1024, 1024.0 / 1.2e6);
+  rig.send("M5 M9\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state() == S{}; }, 1));
+  rig.send("M3 S6000 M7\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state().on; }, 1));
+  EXPECT_FALSE(rig.board().spindle_state().reverse);
+  rig.send("\x18");  // soft reset
+  ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state() == S{}; }, 1));
+  rig.send("G1 X3 F600\n");
+  ASSERT_TRUE(rig.run_until_state("Idle", 3));
+  EXPECT_EQ(rig.board().spindle_state(), S{}) << "the rearm must not restart the spindle";
+  EXPECT_EQ(rig.link().read(br::IO_CTRL), 0u);
 }
 
 TEST(GrblBoard, BoardFaultIsAnAlarmNamingItAndTheNextLineRearms) {

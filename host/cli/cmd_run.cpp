@@ -23,6 +23,7 @@
 #include "host/link/board_capture.hpp"
 #include "host/link/board_state.hpp"
 #include "host/machine/job.hpp"
+#include "host/machine/spindle.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -135,6 +136,10 @@ void run_job(const RunOptions& o) {
                 format_duration(j.summary.time_s).c_str(), b.where.c_str());
     std::fflush(stdout);
   }
+  // The spindle and coolant start off and follow the program's M3/M4/M5,
+  // S, M7/M8/M9 (IO_CTRL), whatever a previous run left.
+  mc::machine::SpindleState spindle;
+  mc::machine::write_spindle(l, m, spindle);
   Progress bar(j, !o.quiet && !o.json);
   StreamOptions so;
   so.queue_ahead_s = m.planner.queue_ahead_s;
@@ -144,11 +149,10 @@ void run_job(const RunOptions& o) {
   so.progress = [&](double t, int line) { bar.show(t, line); };
   so.action = [&](const Move& mv) {
     bar.clear();
+    spindle.apply(*mv.action);
+    mc::machine::write_spindle(l, m, spindle);
     if (o.json) return;
-    std::printf("line %d: %s%s\n", mv.line, action_text(mv).c_str(),
-                std::holds_alternative<mc::gcode::ProgramStop>(*mv.action) || pauses(mv)
-                    ? ""
-                    : " (no output on this board yet)");
+    std::printf("line %d: %s\n", mv.line, action_text(mv).c_str());
     if (pauses(mv) && ::isatty(STDIN_FILENO)) {
       std::printf("  paused: press Enter to continue\n");
       std::string line;
@@ -157,7 +161,10 @@ void run_job(const RunOptions& o) {
   };
   const StreamResult r = stream_job(l, j.moves, j.pieces, cfg, so);
   bar.clear();
-  if (r.stopped) disable_axes(l, axes, true);
+  if (r.stopped) {
+    disable_axes(l, axes, true);
+    mc::machine::write_spindle(l, m, {});  // not on again at the next arm
+  }
   const mc::machine::JobReport rep = mc::machine::report(j, r, jb.ts_s);
   if (!o.plot.empty()) plot_run(o.plot, j, r);
   if (!o.csv.empty()) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <stdexcept>
 #include <type_traits>
 #include <variant>
 
@@ -76,6 +77,12 @@ void BoardBackend::configure(const Settings& settings) {
   if (settings.junction_deviation_mm > 0) cfg_.junction_deviation_mm = settings.junction_deviation_mm;
   if (settings.arc_tolerance_mm > 0) cfg_.arc_tolerance_mm = settings.arc_tolerance_mm;
   s_->set_config(cfg_);
+  // $30/$31 map the S word to SP_PWM as the machine file's [spindle] does
+  // (a range that is empty keeps the machine's).
+  if (settings.spindle_min_rpm < settings.spindle_max_rpm) {
+    machine_.spindle.max_rpm = settings.spindle_max_rpm;
+    machine_.spindle.min_rpm = settings.spindle_min_rpm;
+  }
 }
 
 bool BoardBackend::ready() const {
@@ -87,6 +94,8 @@ void BoardBackend::arm() {
   // then arm as at the start; the command starts where the axes are.
   mc::host::clear_faults(l_);
   const mc::machine::JobBoard b = mc::machine::ready_board(l_, machine_, note_);
+  // Arming cleared IO_CTRL: a program still running gets its spindle back.
+  mc::machine::write_spindle(l_, machine_, spindle_, ovr_.spindle / 100.0);
   s_->restart(b.at);
   lines_.clear();
   armed_ = true;
@@ -145,14 +154,25 @@ void BoardBackend::soft_reset() {
   if (armed_) s_->abort();
   lines_.clear();
   settling_ = false;  // reset: Idle (or an alarm) at once, as Grbl
-  spindle_ = 0;
-  flood_ = mist_ = false;
+  spindle_off();
   read_positions();
 }
 
+void BoardBackend::spindle_off() {
+  spindle_ = {};
+  try {
+    mc::machine::write_spindle(l_, machine_, spindle_);
+  } catch (const std::runtime_error&) {
+    // A link error: the board drops the outputs by itself (watchdog); the
+    // next request reports the link.
+  }
+}
+
 void BoardBackend::set_overrides(const Overrides& o) {
+  const bool speed = o.spindle != ovr_.spindle;
   ovr_ = o;
   s_->set_overrides(o.feed / 100.0, o.rapid / 100.0);
+  if (speed && spindle_.dir != 0) mc::machine::write_spindle(l_, machine_, spindle_, ovr_.spindle / 100.0);
 }
 
 void BoardBackend::fault(uint32_t bits) {
@@ -160,6 +180,7 @@ void BoardBackend::fault(uint32_t bits) {
   lines_.clear();
   const bool critical = (bits & (1u << bb::F_ESTOP)) || limit_fault(bits);
   const int code = limit_fault(bits) ? kAlarmHardLimit : kAlarmAbortCycle;
+  spindle_off();
   events_.push_back(AlarmEvent{code, "Board fault: " + mc::host::fault_names(bits), critical});
 }
 
@@ -204,27 +225,8 @@ void BoardBackend::read_positions() {
 }
 
 void BoardBackend::action(const mc::host::Move& m) {
-  std::visit(
-      [this](const auto& op) {
-        using T = std::decay_t<decltype(op)>;
-        if constexpr (std::is_same_v<T, gcode::StartSpindle>) {
-          spindle_ = op.clockwise ? 1 : -1;
-          rpm_ = op.rpm;
-        } else if constexpr (std::is_same_v<T, gcode::StopSpindle>) {
-          spindle_ = 0;
-        } else if constexpr (std::is_same_v<T, gcode::SetSpindleSpeed>) {
-          rpm_ = op.rpm;
-        } else if constexpr (std::is_same_v<T, gcode::SetCoolant>) {
-          flood_ = op.flood;
-          mist_ = op.mist;
-        } else if constexpr (std::is_same_v<T, gcode::ProgramStop>) {
-          if (op.kind == gcode::StopKind::end || op.kind == gcode::StopKind::end_rewind) {
-            spindle_ = 0;
-            flood_ = mist_ = false;
-          }
-        }
-      },
-      *m.action);
+  spindle_.apply(*m.action);
+  mc::machine::write_spindle(l_, machine_, spindle_, ovr_.spindle / 100.0);
 }
 
 Status BoardBackend::status() const {
@@ -246,10 +248,10 @@ Status BoardBackend::status() const {
   }
   s.position = pos_;
   s.feed_mm_min = c ? c->feed_mm_s * 60 : 0;
-  s.spindle = spindle_;
-  s.spindle_rpm = spindle_ ? rpm_ * ovr_.spindle / 100.0 : 0;
-  s.flood = flood_;
-  s.mist = mist_;
+  s.spindle = spindle_.dir;
+  s.spindle_rpm = spindle_.dir ? spindle_.rpm * ovr_.spindle / 100.0 : 0;
+  s.flood = spindle_.flood;
+  s.mist = spindle_.mist;
   s.blocks_free = std::max(0, blocks_ - int(lines_.size()));
   if (c)
     for (const auto& [key, n] : lines_)

@@ -24,6 +24,7 @@
 #include "host/grbl/settings.hpp"
 #include "host/link/board_state.hpp"
 #include "host/machine/machine_config.hpp"
+#include "host/machine/spindle.hpp"
 #include "host/motion/job_stream.hpp"
 
 namespace mc::grbl {
@@ -86,9 +87,11 @@ class BoardBackend : public Backend {
   bool settling_ = false;
   std::optional<std::chrono::steady_clock::time_point> stopped_at_;
   Overrides ovr_;
-  int spindle_ = 0;
-  double rpm_ = 0;
-  bool flood_ = false, mist_ = false;
+  mc::machine::SpindleState spindle_;  // as the program set it; IO_CTRL follows
+  // The spindle and coolant off, on the board too (after a reset or a
+  // fault: the board drops the pins while disarmed, and must not raise them
+  // again when the next line rearms it).
+  void spindle_off();
   std::deque<Event> events_;
 };
 

@@ -147,6 +147,8 @@ Settings default_settings(const mc::machine::MachineConfig& machine) {
   Settings s;
   s.junction_deviation_mm = machine.planner.junction_deviation_m * 1000.0;
   s.arc_tolerance_mm = machine.planner.arc_tolerance_m * 1000.0;
+  s.spindle_max_rpm = machine.spindle.max_rpm;
+  s.spindle_min_rpm = machine.spindle.min_rpm;
   for (size_t a = 0; a < 3; ++a) {
     if (machine.axes.empty()) break;
     const auto& ax = machine.axes[std::min(a, machine.axes.size() - 1)];

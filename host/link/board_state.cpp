@@ -86,8 +86,10 @@ std::array<int64_t, 3> arm(BoardLink& l, const Note& note) {
       throw BoardError("fault latched: " + fault_names(fault) +
                        "; remove its cause, then run 'motionctl clear-fault'");
     }
-    // The command starts where the axes are: nothing left over runs on.
+    // The command starts where the axes are: nothing left over runs on,
+    // the spindle and coolant included.
     l.write(br::IP_CTRL, 1u << bb::I_ABORT | 1u << bb::I_CLR);
+    l.write(br::IO_CTRL, 0);
     std::vector<std::pair<int, int32_t>> here;
     for (int a = 0; a < naxes; ++a) {
       here.emplace_back(a, int32_t(l.read(br::axis(a, br::AX_POS))));

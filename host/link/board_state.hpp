@@ -54,7 +54,9 @@ void set_position(BoardLink& l, const std::vector<std::pair<int, int32_t>>& axes
 // exit, by design) is cleared first, with a note through `note`; any other
 // latched fault is an error naming it. When the drives were off, the
 // interpolator is aborted and set to the encoder positions first, so the
-// command starts where the axes are. Returns the interpolator position.
+// command starts where the axes are, and IO_CTRL is cleared, so the spindle
+// and coolant a command left on (the board dropped them when it disarmed)
+// do not start again by themselves. Returns the interpolator position.
 std::array<int64_t, 3> arm(BoardLink& l, const Note& note);
 // Where arm() would start a command, without changing anything: the
 // interpolator's command when armed, else the encoder positions. Commands

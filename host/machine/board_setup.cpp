@@ -3,7 +3,9 @@
 #include <string>
 
 #include "hls/board_regs.hpp"
+#include "hls/pid_regs.hpp"
 #include "host/base/errors.hpp"
+#include "host/control/pid_design.hpp"
 
 namespace mc::machine {
 
@@ -65,6 +67,19 @@ void setup_axes(mc::host::BoardLink& l, const MachineConfig& m) {
   check_board(m, l.read(br::INFO));
   const uint32_t want = step_cfg_word(m);
   if (l.read(br::STEP_CFG) != want) l.write_verify(br::STEP_CFG, want);
+  // A machine of steppers only loads no gains, and with them no sample
+  // period: the board would sample (telemetry, FERR) at its power-up
+  // period, its sweep time, faster than the link carries. The machine's
+  // ts_s is its sample period.
+  bool servo = false;
+  for (int a = 0; a < int(m.axes.size()); ++a) servo = servo || !is_stepper(m, a);
+  if (servo || m.axes.empty()) return;
+  const uint16_t ts_addr = mc::pid_reg::addr(mc::pid_reg::GLOBAL_AXIS, mc::pid_reg::G_TS);
+  const uint32_t latency = l.read(mc::pid_reg::addr(mc::pid_reg::GLOBAL_AXIS, mc::pid_reg::G_LATENCY));
+  const uint32_t ts =
+      mc::host::core_ts_cycles(m.axes[0].pid.ts_s, double(l.read(br::CLK_HZ)), latency,
+                               "ts_s ([axis." + m.axes[0].name + ".pid] in " + m.source + ")");
+  if (l.read(ts_addr) != ts) l.write_verify(ts_addr, ts);
 }
 
 std::array<int64_t, 3> enable_machine_axes(mc::host::BoardLink& l, const MachineConfig& m,

@@ -264,6 +264,17 @@ ProbeConfig read_probe(Reader r) {
   return p;
 }
 
+SpindleConfig read_spindle(Reader r) {
+  SpindleConfig s;
+  s.max_rpm = r.number_or("max_rpm", s.max_rpm, Range::positive, "rpm");
+  s.min_rpm = r.number_or("min_rpm", s.min_rpm, Range::non_negative, "rpm");
+  if (!(s.min_rpm < s.max_rpm))
+    throw r.error("min_rpm", format_number(s.min_rpm), "min_rpm < max_rpm = " + format_number(s.max_rpm));
+  s.mist_on_dir = r.boolean_or("mist_on_dir", s.mist_on_dir);
+  r.finish();
+  return s;
+}
+
 MotorParams read_motor(Reader r) {
   MotorParams m{};
   // The upper bounds are a decade or more beyond any motor a small machine
@@ -491,6 +502,7 @@ MachineConfig parse_machine(std::string_view toml_text, const std::string& sourc
   if (top.has("planner")) m.planner = read_planner(top.table("planner"));
   if (top.has("workpiece")) m.workpiece = read_workpiece(top.table("workpiece"));
   if (top.has("probe")) m.probe = read_probe(top.table("probe"));
+  if (top.has("spindle")) m.spindle = read_spindle(top.table("spindle"));
   Reader axes = top.table("axis");
   const std::vector<std::string> names = {"x", "y", "z"};
   for (const std::string& k : axes.keys()) {

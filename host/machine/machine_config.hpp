@@ -143,6 +143,15 @@ struct ProbeConfig {
   double bounce_s = 0.0002;  // the contact chatters this long after each touch and lift
 };
 
+// [spindle], optional: how a program's S word becomes SP_PWM's duty
+// (host/machine/spindle.hpp), as Grbl's $30 and $31: linear from min_rpm
+// (duty 0) to max_rpm (always on).
+struct SpindleConfig {
+  double max_rpm = 24000;  // a router spindle's top speed
+  double min_rpm = 0;
+  bool mist_on_dir = false;  // SP_DIR carries the mist coolant (M7) instead of the direction
+};
+
 struct MachineConfig {
   std::string source;  // file path or "built-in default"
   double clock_hz = 12e6;
@@ -151,6 +160,7 @@ struct MachineConfig {
   PlannerSettings planner;
   std::optional<WorkpieceConfig> workpiece;
   ProbeConfig probe;
+  SpindleConfig spindle;
   double host_period_s = 0.01;
   double host_io_latency_s = 0.001;
   int host_dac_bits = 12;
