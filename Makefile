@@ -13,7 +13,7 @@ SOAK_JOB   ?= examples/profile.nc
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 
-.PHONY: all deps configure test test-sanitize bench lint fuzz format clean regs synth prog flash formal readme-bench soak
+.PHONY: all deps configure test test-sanitize bench lint fuzz format clean regs synth synth-stepper prog flash formal readme-bench soak
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)

@@ -3,6 +3,8 @@
 // for the machine (INFO), with the make target that builds the right one.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -46,8 +48,13 @@ TEST(BoardSetup, StepCfgFromTheStepperTables) {
                                   1u << bb::SC_DIR_INV_LSB | 24u << bb::SC_PW_LSB | 12u << bb::SC_SETUP_LSB);
   // A time that is not a whole number of clocks rounds up: the driver gets
   // at least what it asked for.
-  m.axes[0].stepper->step_pulse_s = 1.01e-6;
+  for (AxisConfig& a : m.axes) a.stepper->step_pulse_s = 1.01e-6;
   EXPECT_EQ(step_cfg_word(m) >> bb::SC_PW_LSB & 0x3F, 13u);
+  // One pair of times serves every driver: the slowest one's.
+  m.axes[2].stepper->step_pulse_s = 5e-6;
+  m.axes[1].stepper->dir_setup_s = 3e-6;
+  EXPECT_EQ(step_cfg_word(m) >> bb::SC_PW_LSB & 0x3F, 60u);
+  EXPECT_EQ(step_cfg_word(m) >> bb::SC_SETUP_LSB & 0x3F, 36u);
   // A servo machine: no stepper bits, no timing.
   EXPECT_EQ(step_cfg_word(default_machine()), 0u);
 }
@@ -69,43 +76,77 @@ TEST(BoardSetup, TheBoardMustBeBuiltForTheMachine) {
   // A generator on X and Y only: Z is refused by name.
   const std::string z = refusal(stepper_router(), bb::info_word(3, 9, board::proto::VERSION, 3, false, true));
   EXPECT_NE(z.find("axis z"), std::string::npos) << z;
+  // A machine of both kinds: no bitstream here has both, and the hint says so.
+  MachineConfig mixed = default_machine();
+  mixed.axes[2].stepper = stepper_router().axes[2].stepper;
+  const std::string mx = refusal(mixed, kStepperInfo);
+  EXPECT_NE(mx.find("neither make synth nor make synth-stepper"), std::string::npos) << mx;
+  EXPECT_EQ(refusal(mixed, both), "");
   // Fewer axes than the machine.
   const std::string n = refusal(default_machine(), bb::info_word(2, 9, board::proto::VERSION, 0, true, true));
   EXPECT_NE(n.find("built with 2"), std::string::npos) << n;
 }
 
-TEST(BoardSetup, StepperTimesBeyondTheRegisterAreRefusedWithTheLine) {
-  // STEP_CFG holds 63 clocks: 5.25 us at 12 MHz.
-  const std::string base = "[axis.x.stepper]\n";
-  for (const char* bad : {"step_pulse_s = 6e-6\n", "dir_setup_s = 1e-5\n", "closed_loop = 1\n"}) {
-    std::string toml;
-    {
-      std::ifstream in(std::string(MC_SOURCE_DIR) + "/configs/stepper_router.toml");
-      toml.assign(std::istreambuf_iterator<char>(in), {});
-    }
-    const size_t at = toml.find(base);
-    ASSERT_NE(at, std::string::npos);
-    toml.insert(at + base.size(), bad);
-    try {
-      parse_machine(toml, "router.toml");
-      ADD_FAILURE() << bad << " was accepted";
-    } catch (const host::InputError& e) {
-      const std::string w = e.what();
-      EXPECT_NE(w.find("router.toml:"), std::string::npos) << w;
-      EXPECT_NE(w.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos) << w;
-    }
+// DRV_EN enables every driver: a stepper axis cannot be turned off alone.
+TEST(BoardSetup, AStepperAxisIsNotDisabledAlone) {
+  EXPECT_NO_THROW(require_disable_alone(stepper_router(), {0, 1, 2}, false));
+  EXPECT_NO_THROW(require_disable_alone(default_machine(), {0}, true));
+  try {
+    require_disable_alone(stepper_router(), {1}, true);
+    ADD_FAILURE() << "a stepper axis was disabled alone";
+  } catch (const host::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("DRV_EN"), std::string::npos) << e.what();
   }
 }
 
-// Grbl's $30/$31 mapping: linear from min_rpm (duty 0) to max_rpm (1023).
+TEST(BoardSetup, StepperTimesBeyondTheRegisterAreRefusedWithTheLine) {
+  std::string text;
+  {
+    std::ifstream in(std::string(MC_SOURCE_DIR) + "/configs/stepper_router.toml");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // STEP_CFG holds 63 clocks: 5.25 us at 12 MHz. Each case replaces X's
+  // value (the file sets every key) and expects the check's own words.
+  struct Case {
+    const char *key, *from, *to, *says;
+  };
+  for (const Case& c :
+       {Case{"step_pulse_s", "step_pulse_s = 2e-6", "step_pulse_s = 6e-6", "5.25e-06 s (63 board"},
+        Case{"dir_setup_s", "dir_setup_s = 1e-6", "dir_setup_s = 1e-5", "5.25e-06 s (63 board"},
+        Case{"closed_loop", "closed_loop = false", "closed_loop = 1", "true or false"}}) {
+    std::string toml = text;
+    const size_t at = toml.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    toml.replace(at, std::strlen(c.from), c.to);
+    const size_t line = size_t(std::count(toml.begin(), toml.begin() + long(at), '\n')) + 1;
+    try {
+      parse_machine(toml, "router.toml");
+      ADD_FAILURE() << c.to << " was accepted";
+    } catch (const host::InputError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("router.toml:" + std::to_string(line) + ": axis.x.stepper." + c.key),
+                std::string::npos)
+          << w;
+      EXPECT_NE(w.find(c.says), std::string::npos) << w;
+    }
+  }
+  // Back within range, the file loads (the replacements above were the only fault).
+  EXPECT_NO_THROW(parse_machine(text, "router.toml"));
+}
+
+// Grbl's $30/$31 mapping: the pin high duty/1024 of the time, linear from
+// min_rpm to max_rpm (1023: always on), at least 1 for a turning spindle.
 TEST(Spindle, DutyFromTheSWord) {
   SpindleConfig c;  // 0..24000 rpm
   EXPECT_EQ(spindle_duty(c, 0), 0u);
-  EXPECT_EQ(spindle_duty(c, 12000), 512u);  // 511.5 rounds up
+  EXPECT_EQ(spindle_duty(c, 12000), 512u);  // half: 512 of 1024 clocks
+  EXPECT_EQ(spindle_duty(c, 6000), 256u);
+  EXPECT_EQ(spindle_duty(c, 1), 1u) << "a spindle asked to turn gets the least duty";
+  EXPECT_EQ(spindle_duty(c, 23990), 1023u);
   EXPECT_EQ(spindle_duty(c, 24000), 1023u);
   EXPECT_EQ(spindle_duty(c, 30000), 1023u);
   c.min_rpm = 6000;
-  EXPECT_EQ(spindle_duty(c, 3000), 0u);
+  EXPECT_EQ(spindle_duty(c, 3000), 1u);
   EXPECT_EQ(spindle_duty(c, 15000), 512u);
 }
 

@@ -333,8 +333,8 @@ TEST(GrblBoard, SpindleAndCoolantAreRecordedInOrder) {
 
 // The program's spindle and coolant reach the board's pins: SP_EN, SP_DIR,
 // FLOOD, and SP_PWM at the duty of the S word (the default machine's
-// max_rpm 24000: S12000 is duty 512 of 1023, high 512 clocks in every
-// 1024), after the move before them; the override scales the duty; M5 M9
+// max_rpm 24000: S12000 is duty 512, high 512 clocks in every 1024), after
+// the move before them; the override scales the duty; M5 M9
 // and a soft reset turn them off, and the next line's rearm does not bring
 // them back.
 TEST(GrblBoard, SpindleAndCoolantDriveTheBoardsPins) {
@@ -353,10 +353,10 @@ TEST(GrblBoard, SpindleAndCoolantDriveTheBoardsPins) {
     return double(rig.board().spindle_high_clocks() - h0) / double(rig.board().cycles() - c0);
   };
   EXPECT_NEAR(duty_over(0.1), 512.0 / 1024, 1024.0 / 1.2e6);
-  rig.send("\x9B");  // spindle override -10 %: S10800, duty 460
+  rig.send("\x9B");  // spindle override -10 %: S10800, 0.45 of 1024 clocks: duty 461
   ASSERT_TRUE(rig.run_until([&] { return rig.status().rpm == 10800; }, 1));
   rig.run_for(0.01);
-  EXPECT_NEAR(duty_over(0.1), 460.0 / 1024, 1024.0 / 1.2e6);
+  EXPECT_NEAR(duty_over(0.1), 461.0 / 1024, 1024.0 / 1.2e6);
   rig.send("M5 M9\n");
   ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state() == S{}; }, 1));
   rig.send("M3 S6000 M7\n");
@@ -372,10 +372,13 @@ TEST(GrblBoard, SpindleAndCoolantDriveTheBoardsPins) {
 
 TEST(GrblBoard, BoardFaultIsAnAlarmNamingItAndTheNextLineRearms) {
   BoardRig rig;
-  rig.send("G1 X1 F600\n");
+  using S = sim::VirtualBoard::SpindleState;
+  rig.send("G1 X1 F600\nM3 S6000 M8\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.board().spindle_state() == S{true, false, true}; }, 2));
   ASSERT_TRUE(rig.run_until_state("Idle", 2));
   // Nobody talks to the board for 300 ms: its watchdog turns the drives off.
   rig.link().poll(std::chrono::milliseconds(300));
+  EXPECT_EQ(rig.board().spindle_state(), S{}) << "the board drops the spindle while disarmed";
   ASSERT_TRUE(rig.run_until([&] { return rig.out().find("ALARM:3") != std::string::npos; }, 1)) << rig.out();
   EXPECT_NE(rig.out().find("[MSG:Board fault: watchdog]"), std::string::npos) << rig.out();
   EXPECT_EQ(rig.status().state, "Alarm");
@@ -385,6 +388,11 @@ TEST(GrblBoard, BoardFaultIsAnAlarmNamingItAndTheNextLineRearms) {
       << rig.out();
   rig.run_for(0.2);
   expect_at(rig.status(), 3, 0, 0);
+  // Rearmed for the next line, the spindle and coolant stay off: the alarm
+  // ended the program's spindle, which must ask for it again.
+  EXPECT_EQ(rig.board().spindle_state(), S{});
+  EXPECT_EQ(rig.link().read(br::IO_CTRL), 0u);
+  EXPECT_EQ(rig.status().rpm, 0);
 }
 
 TEST(GrblBoard, ProbesAndHomingAreRefusedClearly) {

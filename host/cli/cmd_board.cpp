@@ -82,6 +82,7 @@ void disable(const std::string& axis, bool json) {
   BoardLink& l = *b.link;
   const int naxes = read_naxes(l);
   const std::vector<int> axes = axes_of(axis, naxes);
+  mc::machine::require_disable_alone(machine(), axes, !axis.empty());
   disable_axes(l, axes, axis.empty());
   if (json) {
     nlohmann::ordered_json j;

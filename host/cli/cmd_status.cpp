@@ -34,6 +34,10 @@ void status(bool json) {
     nlohmann::ordered_json j;
     j["port"] = b.port->name();
     j["id"] = s.id;
+    const uint32_t info = b.link->read(br::INFO);
+    j["build"] = {{"servo", bb::info_servo(info)},
+                  {"steppers", bb::info_steppers(info)},
+                  {"handwheel", bb::info_handwheel(info)}};
     j["clock_hz"] = s.clk_hz;
     j["ts_s"] = s.ts_s();
     j["ts_cycles"] = s.ts_cycles;
@@ -76,7 +80,8 @@ void status(bool json) {
   }
   char line[300];
   std::cout << "board at " << b.where << ": clock " << s.clk_hz << " Hz, Ts " << format_duration(s.ts_s())
-            << " (" << s.ts_cycles << " cycles), watchdog " << watchdog_text(s) << '\n';
+            << " (" << s.ts_cycles << " cycles), watchdog " << watchdog_text(s) << '\n'
+            << "built with " << build_text(b.link->read(br::INFO)) << '\n';
   std::cout << "drives " << (s.armed() ? "ARMED" : "off") << ", faults: " << fault_names(s.fault)
             << ", interpolator " << ((s.ip_stat >> bb::IS_BUSY & 1) ? "busy" : "idle") << " ("
             << (s.ip_stat & 0xFFFF) << " words queued, " << (s.ip_segs & 0xFFFF) << " segments done)\n";

@@ -93,9 +93,10 @@ void BoardBackend::arm() {
   // After a fault: clear it (BoardError while its cause is still there),
   // then arm as at the start; the command starts where the axes are.
   mc::host::clear_faults(l_);
+  // Arming clears IO_CTRL; the fault that disarmed the board ended the
+  // program's spindle and coolant (fault()), so they stay off until the
+  // program asks again, as after a Grbl alarm.
   const mc::machine::JobBoard b = mc::machine::ready_board(l_, machine_, note_);
-  // Arming cleared IO_CTRL: a program still running gets its spindle back.
-  mc::machine::write_spindle(l_, machine_, spindle_, ovr_.spindle / 100.0);
   s_->restart(b.at);
   lines_.clear();
   armed_ = true;

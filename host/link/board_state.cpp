@@ -18,6 +18,16 @@ int read_naxes(BoardLink& l) {
   return bb::info_naxes(l.read(br::INFO));
 }
 
+std::string build_text(uint32_t info) {
+  std::string t = bb::info_servo(info) ? "servo loops; " : "no loops; ";
+  std::string st;
+  for (int a = 0; a < bb::info_naxes(info) && a < 3; ++a)
+    if (bb::info_steppers(info) >> a & 1) st += (st.empty() ? "" : ", ") + std::string(1, "xyz"[a]);
+  t += st.empty() ? "no step generators" : "step generators on " + st;
+  t += bb::info_handwheel(info) ? "; handwheel" : "; no handwheel";
+  return t;
+}
+
 std::string fault_names(uint32_t f) {
   std::string s;
   const auto add = [&](const std::string& n) { s += (s.empty() ? "" : ", ") + n; };

@@ -38,6 +38,11 @@ BoardState read_state(BoardLink& l);
 // The number of axes the board was built with (INFO's NAXES field).
 int read_naxes(BoardLink& l);
 
+// What the board was built with, from INFO: "servo loops; step generators
+// on x, y, z; handwheel" (the loops, the axes with a step generator, the
+// handwheel decoder; "no loops", "no step generators" when absent).
+std::string build_text(uint32_t info);
+
 // "watchdog, limit x": the FAULT bits by name ("none" for 0).
 std::string fault_names(uint32_t fault);
 

@@ -1,5 +1,6 @@
 #include "host/machine/board_setup.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "hls/board_regs.hpp"
@@ -19,7 +20,12 @@ bool is_stepper(const MachineConfig& m, int a) {
   return a < int(m.axes.size()) && m.axes[size_t(a)].stepper.has_value();
 }
 
-std::string build_hint(bool stepper) {
+std::string build_hint(const MachineConfig& m, bool stepper) {
+  bool servo_axes = false, stepper_axes = false;
+  for (const AxisConfig& a : m.axes) (a.stepper ? stepper_axes : servo_axes) = true;
+  if (servo_axes && stepper_axes)
+    return " (neither make synth nor make synth-stepper builds both on the iCEBreaker: docs/board.md; the "
+           "virtual board has both)";
   return stepper ? " (make synth-stepper builds one)" : " (make synth builds one)";
 }
 
@@ -27,7 +33,7 @@ std::string build_hint(bool stepper) {
 
 uint32_t step_cfg_word(const MachineConfig& m) {
   uint32_t w = 0;
-  bool timed = false;
+  int pw = 0, setup = 0;
   for (size_t a = 0; a < m.axes.size() && a < 3; ++a) {
     if (!m.axes[a].stepper) continue;
     const StepperConfig& s = *m.axes[a].stepper;
@@ -35,13 +41,11 @@ uint32_t step_cfg_word(const MachineConfig& m) {
     if (s.closed_loop) w |= 1u << (bb::SC_CLOSED_LSB + a);
     if (s.step_active_low) w |= 1u << (bb::SC_STEP_INV_LSB + a);
     if (s.dir_reversed) w |= 1u << (bb::SC_DIR_INV_LSB + a);
-    if (!timed) {
-      w |= uint32_t(step_time_clocks(s.step_pulse_s, m.clock_hz)) << bb::SC_PW_LSB;
-      w |= uint32_t(step_time_clocks(s.dir_setup_s, m.clock_hz)) << bb::SC_SETUP_LSB;
-      timed = true;
-    }
+    // One pair of times for every driver: the slowest driver's.
+    pw = std::max(pw, step_time_clocks(s.step_pulse_s, m.clock_hz));
+    setup = std::max(setup, step_time_clocks(s.dir_setup_s, m.clock_hz));
   }
-  return w;
+  return w | uint32_t(pw) << bb::SC_PW_LSB | uint32_t(setup) << bb::SC_SETUP_LSB;
 }
 
 void check_board(const MachineConfig& m, uint32_t info) {
@@ -58,7 +62,7 @@ void check_board(const MachineConfig& m, uint32_t info) {
         "axis " + name + " (" + m.source + ")", stepper ? "a stepper axis" : "a servo axis",
         std::string(stepper ? "a board built with a step generator on axis " + name
                             : "a board built with the PID loops") +
-            build_hint(stepper),
+            build_hint(m, stepper),
         "the board's INFO says it has " + std::string(stepper ? "no step generator there" : "no loops"));
   }
 }
@@ -95,6 +99,18 @@ void require_servo(const MachineConfig& m, int a, std::string_view command) {
   const std::string& name = m.axes[size_t(a)].name;
   throw InputError("--axis", name, "a servo axis: " + std::string(command) + " works on a PID loop",
                    "axis " + name + " is a stepper ([axis." + name + ".stepper] in " + m.source + ")");
+}
+
+void require_disable_alone(const MachineConfig& m, const std::vector<int>& axes, bool alone) {
+  if (!alone) return;
+  for (int a : axes) {
+    if (!is_stepper(m, a)) continue;
+    const std::string& name = m.axes[size_t(a)].name;
+    throw InputError("--axis", name, "a servo axis, or no --axis to turn every drive off",
+                     "axis " + name +
+                         " is a stepper: its driver is enabled by DRV_EN with every other, "
+                         "so it cannot be disabled alone");
+  }
 }
 
 void require_ready(mc::host::BoardLink& l, const MachineConfig& m, int a) {

@@ -21,9 +21,9 @@
 
 namespace mc::machine {
 
-// STEP_CFG for the machine: stepper bits, closed-loop bits, the pulse and
-// setup times of the first stepper axis (the register holds one pair for
-// all: a machine's drivers are alike) in board clocks, polarities.
+// STEP_CFG for the machine: stepper bits, closed-loop bits, polarities, and
+// the pulse and setup times in board clocks, the longest any stepper axis
+// asks for (the register holds one pair for every driver).
 uint32_t step_cfg_word(const MachineConfig& m);
 
 // InputError unless a board whose INFO register reads `info` can drive the
@@ -45,6 +45,11 @@ std::array<int64_t, 3> enable_machine_axes(mc::host::BoardLink& l, const Machine
 // InputError unless axis a of the machine is a servo axis: `command`
 // measures or tunes a PID loop, which a stepper axis has none of.
 void require_servo(const MachineConfig& m, int a, std::string_view command);
+
+// InputError if `alone` (one axis, the others left armed) names a stepper
+// axis: its driver's enable is the shared DRV_EN, so only turning every
+// drive off stops it.
+void require_disable_alone(const MachineConfig& m, const std::vector<int>& axes, bool alone);
 
 // Before a move of axis a: InputError if a servo axis's PID is disabled (a
 // stepper axis is always ready: the move arms it).

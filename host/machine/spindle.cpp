@@ -37,10 +37,13 @@ void SpindleState::apply(const gc::CanonOp& op) {
 }
 
 uint32_t spindle_duty(const SpindleConfig& c, double rpm) {
-  constexpr double kFull = (1 << bb::IO_DUTY_BITS) - 1;
+  // The pin is high `duty` clocks of every 1024 (1023: always on), so the
+  // fraction f is duty / 1024; a spindle asked to turn gets at least 1, as
+  // Grbl's minimum PWM value.
+  constexpr long kPeriod = 1 << bb::IO_DUTY_BITS;
   if (!(rpm > 0)) return 0;
   const double f = std::clamp((rpm - c.min_rpm) / (c.max_rpm - c.min_rpm), 0.0, 1.0);
-  return uint32_t(std::lround(f * kFull));
+  return uint32_t(std::clamp(std::lround(f * double(kPeriod)), 1L, kPeriod - 1));
 }
 
 uint32_t io_ctrl_word(const SpindleConfig& c, const SpindleState& s, double speed_override) {

@@ -22,9 +22,9 @@ struct SpindleState {
   void apply(const mc::gcode::CanonOp& op);
 };
 
-// SP_PWM's duty for `rpm` (of 1023): 0 at 0 rpm, linear from min_rpm (duty
-// 0) to max_rpm (1023, always on), clamped, as Grbl's $30/$31 map speed to
-// PWM.
+// SP_PWM's duty for `rpm`: high `duty` clocks of each 1024-clock period,
+// linear from min_rpm (1) to max_rpm (1023, always on), as Grbl's $30/$31
+// map speed to PWM; 0 at 0 rpm.
 uint32_t spindle_duty(const SpindleConfig& c, double rpm);
 // IO_CTRL for the state, the speed scaled by `speed_override` (1: 100 %).
 uint32_t io_ctrl_word(const SpindleConfig& c, const SpindleState& s, double speed_override = 1);
