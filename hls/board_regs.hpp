@@ -19,7 +19,7 @@ namespace proto {
 constexpr uint8_t SYNC = 0xA5;
 constexpr uint8_t VERSION = 5;  // 5: INFO names the build (step generators, loops, handwheel); 4: machine
                                 // I/O; 3: POS, HW_POS read-only, 8-bit error counts
-constexpr int HDR_BYTES = 4;  // SYNC, LEN, SEQ, CMD
+constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
 constexpr int SEG_BYTES = 40;          // one interpolator segment (10 words)

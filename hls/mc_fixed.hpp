@@ -115,4 +115,17 @@ constexpr int32_t acc_to_doper(int64_t v) {
   return sat32((i128(v) + (i128(1) << (sh - 1))) >> sh);
 }
 
+// A free-running PWM counter of period P compared with a duty d <= P held
+// through n clocks: of the counter values p0, p0 + 1, ... (mod P) the n
+// clocks see, how many lie below d. The twins' fast-forwards count a PWM
+// pin's high clocks over a skipped stretch with it (not RTL).
+constexpr uint64_t pwm_high_count(uint32_t p0, uint32_t d, uint32_t P, uint64_t n) {
+  const uint32_t rem = uint32_t(n % P);
+  // Whole periods, then rem values from p0, wrapping at most once.
+  uint64_t high = n / P * d;
+  if (p0 < d) high += (p0 + rem < d ? p0 + rem : d) - p0;
+  if (p0 + rem > P) high += (p0 + rem - P < d ? p0 + rem - P : d);
+  return high;
+}
+
 }  // namespace mc

@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "board_regs.hpp"
+#include "mc_fixed.hpp"
 
 namespace mc {
 
@@ -213,6 +214,17 @@ class McIo {
     return r.sp_en_o == on && r.sp_dir_o == (in.armed && (r.mist_on_dir ? r.mist : r.sp_on && r.sp_rev)) &&
            r.flood_o == (in.armed && r.flood) && r.mist_o == (in.armed && r.mist) &&
            (!steady_pwm || r.sp_pwm_o == (on && r.duty == 0x3FF));
+  }
+  // Of the next n quiet clocks, those after whose edge SP_PWM is high: the
+  // pin after an edge is "counter < duty" of the clock before (always high
+  // at duty 1023) while the spindle is on, and a quiet stretch holds the
+  // enable and the duty (a host that measures the duty over a skipped
+  // stretch needs it; not RTL).
+  uint64_t sp_high_in(uint32_t n) const {
+    constexpr uint32_t kPeriod = 1024;  // the 10-bit counter
+    if (!r.sp_en_o || r.duty == 0) return 0;
+    if (r.duty == kPeriod - 1) return n;
+    return pwm_high_count(r.pcnt, r.duty, kPeriod, n);
   }
   // n quiet clocks with `armed` held: the PWM counter runs, its pin shows
   // the last of them.

@@ -297,14 +297,7 @@ class MotionCore {
   // follows from the duty and the counter's phase (a host that integrates
   // the drive over a skipped stretch needs it; not RTL).
   uint32_t pwm_high_in(int a, uint32_t n) const {
-    constexpr uint32_t P = pwm_mask + 1;
-    const uint32_t d = duty(r_.drv_u[a]), p0 = r_.pcnt, rem = n % P;
-    // The counter takes the values p0, p0 + 1, ... (mod P): whole periods,
-    // then rem values from p0, wrapping at most once (d < P).
-    uint32_t high = n / P * d;
-    if (p0 < d) high += (p0 + rem < d ? p0 + rem : d) - p0;
-    if (p0 + rem > P) high += (p0 + rem - P < d ? p0 + rem - P : d);
-    return high;
+    return uint32_t(pwm_high_count(r_.pcnt, duty(r_.drv_u[a]), pwm_mask + 1, n));
   }
 
   const Pid& pid() const { return pid_; }

@@ -72,6 +72,7 @@ class MotioncoreIcebreaker {
   // After how many of the next n edges axis a's PWM pin is high, when
   // advance(p, n) does them (the drive holds; EN and DIR keep their level).
   uint32_t pwm_high_in(int a, uint32_t n) const { return a < NAXES ? u_board.u_core.pwm_high_in(a, n) : 0; }
+  uint64_t sp_high_in(uint32_t n) const { return u_board.u_io.sp_high_in(n); }
 
   // One rising clock edge with these pin levels.
   void step(const IcebreakerPins& p) {

@@ -1,7 +1,5 @@
 #include "sim/vboard/board_model.hpp"
 
-#include <algorithm>
-
 #include "Vmotioncore_icebreaker.h"
 #include "Vmotioncore_icebreaker___024root.h"
 #include "verilated.h"
@@ -45,7 +43,7 @@ class TwinBoard final : public BoardModel {
     return b_.dir(a) ? -high : high;
   }
   void advance(const IcebreakerPins& p, uint32_t n) override {
-    sp_high_ += sp_high_in(n);
+    sp_high_ += b_.sp_high_in(n);
     b_.advance(p, n);
   }
   bool sp_pwm() const override { return b_.sp_pwm(); }
@@ -54,23 +52,6 @@ class TwinBoard final : public BoardModel {
   bool flood() const override { return b_.flood(); }
 
  private:
-  // Of the next n clocks of a quiet stretch, those after which SP_PWM is
-  // high. mc_io's pin after an edge is "counter < duty" of the clock
-  // before (always high at duty 1023) while the spindle is on, and a quiet
-  // stretch holds sp_en_o at "armed and on" and the duty.
-  uint64_t sp_high_in(uint32_t n) const {
-    const auto& r = b_.u_board.u_io.r;
-    constexpr uint32_t kPeriod = 1024;  // the 10-bit counter
-    if (!r.sp_en_o || r.duty == 0) return 0;
-    if (r.duty == kPeriod - 1) return n;
-    const uint32_t d = r.duty, from = r.pcnt, rest = n % kPeriod;
-    // Counter values below the duty in [a, b), within one period.
-    const auto below = [d](uint32_t a, uint32_t b) { return a < d ? std::min(b, d) - a : 0u; };
-    const uint32_t tail = from + rest <= kPeriod ? below(from, from + rest)
-                                                 : below(from, kPeriod) + below(0, from + rest - kPeriod);
-    return uint64_t(n / kPeriod) * d + tail;
-  }
-
   // Built as the Verilated top is (sim/vboard/CMakeLists.txt): a step
   // generator on every axis, STEP_CFG choosing which axes use it.
   MotioncoreIcebreaker<kBoardAxes, 12'000'000, 1'000'000, true, MC_VBOARD_STEPPERS> b_;
