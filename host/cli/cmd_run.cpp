@@ -161,10 +161,8 @@ void run_job(const RunOptions& o) {
   };
   const StreamResult r = stream_job(l, j.moves, j.pieces, cfg, so);
   bar.clear();
-  if (r.stopped) {
-    disable_axes(l, axes, true);
-    mc::machine::write_spindle(l, m, {});  // not on again at the next arm
-  }
+  // Drives off stops the spindle too; the next arm clears IO_CTRL.
+  if (r.stopped) disable_axes(l, axes, true);
   const mc::machine::JobReport rep = mc::machine::report(j, r, jb.ts_s);
   if (!o.plot.empty()) plot_run(o.plot, j, r);
   if (!o.csv.empty()) {

@@ -30,11 +30,11 @@ void status(bool json) {
   const BoardState s = read_state(*b.link);
   const auto scale = axis_scales();
   const LinkCounters& c = b.link->counters();
+  const uint32_t info = b.link->read(br::INFO);
   if (json) {
     nlohmann::ordered_json j;
     j["port"] = b.port->name();
     j["id"] = s.id;
-    const uint32_t info = b.link->read(br::INFO);
     j["build"] = {{"servo", bb::info_servo(info)},
                   {"steppers", bb::info_steppers(info)},
                   {"handwheel", bb::info_handwheel(info)}};
@@ -81,7 +81,7 @@ void status(bool json) {
   char line[300];
   std::cout << "board at " << b.where << ": clock " << s.clk_hz << " Hz, Ts " << format_duration(s.ts_s())
             << " (" << s.ts_cycles << " cycles), watchdog " << watchdog_text(s) << '\n'
-            << "built with " << build_text(b.link->read(br::INFO)) << '\n';
+            << "built with " << build_text(info) << '\n';
   std::cout << "drives " << (s.armed() ? "ARMED" : "off") << ", faults: " << fault_names(s.fault)
             << ", interpolator " << ((s.ip_stat >> bb::IS_BUSY & 1) ? "busy" : "idle") << " ("
             << (s.ip_stat & 0xFFFF) << " words queued, " << (s.ip_segs & 0xFFFF) << " segments done)\n";

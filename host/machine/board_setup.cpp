@@ -20,10 +20,19 @@ bool is_stepper(const MachineConfig& m, int a) {
   return a < int(m.axes.size()) && m.axes[size_t(a)].stepper.has_value();
 }
 
+// Whether the machine has servo axes, stepper axes.
+struct Kinds {
+  bool servo = false, stepper = false;
+};
+Kinds kinds(const MachineConfig& m) {
+  Kinds k;
+  for (const AxisConfig& a : m.axes) (a.stepper ? k.stepper : k.servo) = true;
+  return k;
+}
+
 std::string build_hint(const MachineConfig& m, bool stepper) {
-  bool servo_axes = false, stepper_axes = false;
-  for (const AxisConfig& a : m.axes) (a.stepper ? stepper_axes : servo_axes) = true;
-  if (servo_axes && stepper_axes)
+  const Kinds k = kinds(m);
+  if (k.servo && k.stepper)
     return " (neither make synth nor make synth-stepper builds both on the iCEBreaker: docs/board.md; the "
            "virtual board has both)";
   return stepper ? " (make synth-stepper builds one)" : " (make synth builds one)";
@@ -75,9 +84,8 @@ void setup_axes(mc::host::BoardLink& l, const MachineConfig& m) {
   // period: the board would sample (telemetry, FERR) at its power-up
   // period, its sweep time, faster than the link carries. The machine's
   // ts_s is its sample period.
-  bool servo = false;
-  for (int a = 0; a < int(m.axes.size()); ++a) servo = servo || !is_stepper(m, a);
-  if (servo || m.axes.empty()) return;
+  const Kinds k = kinds(m);
+  if (!k.stepper || k.servo) return;
   const uint16_t ts_addr = mc::pid_reg::addr(mc::pid_reg::GLOBAL_AXIS, mc::pid_reg::G_TS);
   const uint32_t latency = l.read(mc::pid_reg::addr(mc::pid_reg::GLOBAL_AXIS, mc::pid_reg::G_LATENCY));
   const uint32_t ts =

@@ -98,21 +98,10 @@ class Reader {
   // loading, with the documented default (configs/default.toml names it).
   double number_or(std::string_view key, double fallback, Range r, std::string_view unit,
                    double hi = std::numeric_limits<double>::infinity(), std::string_view why = {}) {
-    if (!has(key)) {
-      used_.insert(std::string(key));
-      order_.emplace_back(key);
-      return fallback;
-    }
-    return number(key, r, unit, hi, why);
+    return absent(key) ? fallback : number(key, r, unit, hi, why);
   }
-
   int integer_or(std::string_view key, int fallback, int lo, int hi, std::string_view unit) {
-    if (!has(key)) {
-      used_.insert(std::string(key));
-      order_.emplace_back(key);
-      return fallback;
-    }
-    return integer(key, lo, hi, unit);
+    return absent(key) ? fallback : integer(key, lo, hi, unit);
   }
 
   int integer(std::string_view key, int lo, int hi, std::string_view unit) {
@@ -131,14 +120,7 @@ class Reader {
     if (!b) throw bad(key, n, "true or false", "wrong type");
     return b->get();
   }
-  bool boolean_or(std::string_view key, bool fallback) {
-    if (!has(key)) {
-      used_.insert(std::string(key));
-      order_.emplace_back(key);
-      return fallback;
-    }
-    return boolean(key);
-  }
+  bool boolean_or(std::string_view key, bool fallback) { return absent(key) ? fallback : boolean(key); }
 
   std::string string(std::string_view key, const std::vector<std::string>& allowed) {
     const toml::node& n = need(key);
@@ -187,6 +169,15 @@ class Reader {
   int64_t line() const { return line_; }
 
  private:
+  // An optional key left out: known (listed in "expected one of"), not an
+  // error.
+  bool absent(std::string_view key) {
+    if (has(key)) return false;
+    used_.insert(std::string(key));
+    order_.emplace_back(key);
+    return true;
+  }
+
   const toml::node& need(std::string_view key) {
     const std::string k(key);
     if (!used_.count(k)) order_.push_back(k);
@@ -355,9 +346,9 @@ StepperConfig read_stepper(Reader r, double clock_hz) {
     if (v > longest)
       throw r.error(key, format_number(v),
                     "0 < " + std::string(key) + " <= " + format_number(longest) + " s (" + why + ")");
-  s.closed_loop = r.boolean_or("closed_loop", false);
-  s.step_active_low = r.boolean_or("step_active_low", false);
-  s.dir_reversed = r.boolean_or("dir_reversed", false);
+  s.closed_loop = r.boolean_or("closed_loop", s.closed_loop);
+  s.step_active_low = r.boolean_or("step_active_low", s.step_active_low);
+  s.dir_reversed = r.boolean_or("dir_reversed", s.dir_reversed);
   r.finish();
   return s;
 }

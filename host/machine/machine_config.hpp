@@ -145,7 +145,7 @@ struct ProbeConfig {
 
 // [spindle], optional: how a program's S word becomes SP_PWM's duty
 // (host/machine/spindle.hpp), as Grbl's $30 and $31: linear from min_rpm
-// (duty 0) to max_rpm (always on).
+// (the least duty) to max_rpm (always on).
 struct SpindleConfig {
   double max_rpm = 24000;  // a router spindle's top speed
   double min_rpm = 0;

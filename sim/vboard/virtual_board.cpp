@@ -113,7 +113,7 @@ struct VirtualBoard::Impl {
         lim[a] = Contact(bounce_steps(h->bounce_s), seed_base + uint64_t(a) + 1);
     has_probe = m.workpiece && naxes == kBoardAxes;
     if (has_probe) probe = Contact(bounce_steps(m.probe.bounce_s), seed_base + kBoardAxes + 1);
-    settle_contacts();
+    place_contacts(true);
     for (int a = 0; a < kBoardAxes; ++a) {
       const Slot& s = slot[a];
       const QuadPins q = quadrature_pins(s.shown, s.present() ? s.cpr : 1 << 30);
@@ -140,22 +140,15 @@ struct VirtualBoard::Impl {
     }
     return slot[2].table_m() * 1e3 <= face_z;
   }
-  void show_contacts() {
+  // The switches where the tables are: at power-up (settle, no bounce) or
+  // at a plant-step boundary.
+  void place_contacts(bool settle) {
+    const auto put = [settle](Contact& c, bool closed) { settle ? c.settle(closed) : c.step(closed); };
+    for (int a = 0; a < naxes; ++a)
+      if (has_home(a)) put(lim[a], home_closed(a));
+    if (has_probe) put(probe, probe_closed());
     for (int a = 0; a < kBoardAxes; ++a) pins.lim[a] = has_home(a) && lim[a].pin();
     pins.probe = has_probe && probe.pin();
-  }
-  void settle_contacts() {
-    for (int a = 0; a < naxes; ++a)
-      if (has_home(a)) lim[a].settle(home_closed(a));
-    if (has_probe) probe.settle(probe_closed());
-    show_contacts();
-  }
-  // At a plant-step boundary: the switches where the tables are.
-  void step_contacts() {
-    for (int a = 0; a < naxes; ++a)
-      if (has_home(a)) lim[a].step(home_closed(a));
-    if (has_probe) probe.step(probe_closed());
-    show_contacts();
   }
   // No switch pin will change at the next boundary: none bouncing, none crossed.
   bool contacts_quiet() const {
@@ -195,7 +188,7 @@ struct VirtualBoard::Impl {
   // host line's bit edges), then the plants with the drive's mean over the
   // step.
   void plant_step(std::vector<uint8_t>& out) {
-    step_contacts();
+    place_contacts(false);
     plan_edges();
     uint32_t edges_until = 0;  // clocks in which some encoder pin still changes
     for (int a = 0; a < naxes; ++a)
@@ -349,7 +342,7 @@ void VirtualBoard::start_at(int axis, double table_m) {
   if (axis < 0 || axis >= impl_->naxes)
     throw std::logic_error("VirtualBoard::start_at: axis " + std::to_string(axis) + " is not configured");
   impl_->slot[axis].start_m = table_m;
-  impl_->settle_contacts();
+  impl_->place_contacts(true);
 }
 bool VirtualBoard::limit_pin(int axis) const {
   return impl_->pins.lim[axis];
