@@ -17,8 +17,9 @@ namespace mc::board {
 // ---- protocol constants -------------------------------------------------
 namespace proto {
 constexpr uint8_t SYNC = 0xA5;
-constexpr uint8_t VERSION = 5;  // 5: INFO names the build (step generators, loops, handwheel); 4: machine
-                                // I/O; 3: POS, HW_POS read-only, 8-bit error counts
+constexpr uint8_t VERSION = 6;  // 6: HOMED, ORIGIN (machine zero kept on the board); 5: INFO names
+                                // the build (step generators, loops, handwheel); 4: machine I/O; 3: POS,
+                                // HW_POS read-only, 8-bit error counts
 constexpr int HDR_BYTES = 4;    // SYNC, LEN, SEQ, CMD
 constexpr int CRC_BYTES = 2;
 constexpr int MAX_LEN = 240;           // payload bytes: six segments
@@ -76,7 +77,8 @@ constexpr uint16_t MPG = 0x0118;
 constexpr uint16_t MPG_INC = 0x0119;
 constexpr uint16_t STEP_CFG = 0x011A;
 constexpr uint16_t IO_STAT = 0x011B;
-constexpr uint16_t GLOBAL_END = 0x011C;  // first unused global address (at most 0x0120)
+constexpr uint16_t HOMED = 0x011C;
+constexpr uint16_t GLOBAL_END = 0x011D;  // first unused global address (at most 0x0120)
 // Per-axis registers: AXIS_BASE + axis * AXIS_STRIDE + offset.
 constexpr uint16_t AXIS_BASE = 0x0200;
 constexpr uint16_t AXIS_STRIDE = 0x10;
@@ -90,7 +92,8 @@ constexpr uint16_t AX_OUT = 0x6;
 constexpr uint16_t AX_DRV = 0x7;
 constexpr uint16_t AX_FERR = 0x8;
 constexpr uint16_t AX_FOLLOW = 0x9;
-constexpr uint16_t AX_END = 0xA;  // first unused offset
+constexpr uint16_t AX_ORIGIN = 0xA;
+constexpr uint16_t AX_END = 0xB;  // first unused offset
 
 constexpr uint16_t axis(int a, uint16_t off) {
   return uint16_t(AXIS_BASE + a * AXIS_STRIDE + off);
@@ -247,7 +250,7 @@ struct RegDef {
   const char* doc;
 };
 
-constexpr std::array<RegDef, 38> REGS = {{
+constexpr std::array<RegDef, 40> REGS = {{
     {"ID", reg::ID, false, Access::R, "0x4D43 (\"MC\") << 16 | protocol version"},
     {"INFO", reg::INFO, false, Access::R,
      "[3:0] NAXES, [7:4] FIFO_AW, [15:8] protocol version, [18:16] axes with a step generator, [19] PID "
@@ -296,6 +299,8 @@ constexpr std::array<RegDef, 38> REGS = {{
     {"IO_STAT", reg::IO_STAT, false, Access::R,
      "[0] probe, [3:1] home switches (filtered, active high), [6:4] step errors, [31:16] handwheel "
      "counts to move (signed)"},
+    {"HOMED", reg::HOMED, false, Access::RW,
+     "[2:0] axes whose ORIGIN a homing cycle set; the board only keeps it (0 at power-up)"},
     {"POS", reg::AX_POS, true, Access::R,
      "encoder position at the last sample, counts (from power-up; the host keeps offsets)"},
     {"ENC_CFG", reg::AX_ENC_CFG, true, Access::RW,
@@ -313,6 +318,8 @@ constexpr std::array<RegDef, 38> REGS = {{
     {"FERR", reg::AX_FERR, true, Access::RW, "following-error limit, counts [15:0] (0 off)"},
     {"FOLLOW", reg::AX_FOLLOW, true, Access::R,
      "following error at the last sample, CMD - POS saturated to 32 bits, counts (what FERR checks)"},
+    {"ORIGIN", reg::AX_ORIGIN, true, Access::RW,
+     "machine zero in POS counts, set by the host's homing cycle; the board only keeps it (0 at power-up)"},
 }};
 
 // Telemetry payload: TLM_HDR, then for each axis in TLM.axes (lowest first)

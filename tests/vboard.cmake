@@ -50,3 +50,9 @@ target_compile_definitions(test_vboard_stepper PRIVATE MC_SOURCE_DIR="${CMAKE_SO
 mc_gtest(test_vboard_io system test_vboard_io.cpp)
 target_link_libraries(test_vboard_io PRIVATE mc_motion mc_vboard)
 target_compile_definitions(test_vboard_io PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+
+# Machine cycles on the virtual board: homing repeatable against the plant,
+# probing a known surface (issue 19).
+mc_gtest(test_cycles system TIMEOUT 900 test_cycles.cpp)
+target_link_libraries(test_cycles PRIVATE mc_motion mc_vboard)
+target_compile_definitions(test_cycles PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")

@@ -125,13 +125,15 @@ void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::arra
   if (!(feed_mm_min > 0)) throw InputError("--feed", quote(feed_text), "a feed above 0 mm/min");
   const auto scale = axis_scales();
   // The machine's travel and speeds, checked before the drives are armed.
+  // in machine counts: the board's counts less its origin (homing sets it).
   const mc::machine::MachineConfig m = machine();
-  const Vec3 from = start_position(l);
+  const MachineOrigin org = read_origin(l);
+  const Vec3 from = org.machine(start_position(l));
   const Vec3 to = target(from, scale);
   mc::machine::check_travel(m, from, to, asked);
   mc::machine::check_feed(m, from, to, feed_mm_min, {"--feed", feed_text});
   const MoveResult r = move_axes(
-      l, [&](const Vec3& at) { return target(at, scale); }, feed_mm_min, scale, note);
+      l, [&](const Vec3& at) { return org.board(target(org.machine(at), scale)); }, feed_mm_min, scale, note);
   if (!r.moved) {
     std::cout << (json ? "{\n  \"moved\": false\n}\n" : "already there\n");
     return;
@@ -142,8 +144,8 @@ void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::arra
   std::string line = "done:";
   for (int a = 0; a < 3; ++a) {
     if (scale[size_t(a)] == 0) continue;
-    const double pos_mm = r.pos[size_t(a)] / scale[size_t(a)] * 1e3,
-                 cmd_mm = double(r.to[size_t(a)]) / scale[size_t(a)] * 1e3;
+    const double pos_mm = double(r.pos[size_t(a)] - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3,
+                 cmd_mm = double(r.to[size_t(a)] - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3;
     j["axes"].push_back({{"axis", axis_name(a)}, {"position_mm", pos_mm}, {"command_mm", cmd_mm}});
     char b[96];
     std::snprintf(b, sizeof b, " %s %.4f mm (command %.4f)", axis_name(a), pos_mm, cmd_mm);

@@ -126,8 +126,9 @@ void run_job(const RunOptions& o) {
   const mc::machine::JobBoard jb = mc::machine::ready_board(l, m, note);
   const std::vector<int>& axes = jb.axes;
   const Vec3 at = jb.at;
-  const mc::host::PlannerConfig cfg = mc::machine::planner_config(m);
-  const mc::machine::Job j = mc::machine::plan_job(o.file, m, to_mm(at, cfg), level ? &*level : nullptr);
+  const mc::host::PlannerConfig cfg = mc::machine::planner_config(m, jb.origin);
+  const mc::machine::Job j =
+      mc::machine::plan_job(o.file, m, to_mm(at, cfg), level ? &*level : nullptr, jb.origin);
   // Ctrl-C from here on stops the job along the path; the line below says so.
   catch_interrupts();
   if (!o.json) {

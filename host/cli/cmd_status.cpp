@@ -31,6 +31,12 @@ void status(bool json) {
   const auto scale = axis_scales();
   const LinkCounters& c = b.link->counters();
   const uint32_t info = b.link->read(br::INFO);
+  // Counts are the board's (from power-up); mm are machine coordinates,
+  // from the origin a homing cycle set (none: from power-up as well).
+  const MachineOrigin org = read_origin(*b.link);
+  const auto mm_of = [&](int a, int32_t counts) {
+    return double(counts - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3;
+  };
   if (json) {
     nlohmann::ordered_json j;
     j["port"] = b.port->name();
@@ -64,9 +70,11 @@ void status(bool json) {
       ja["saturated"] = x.sat;
       ja["enabled"] = x.pid_en;
       ja["drive"] = x.drv_en;
+      ja["homed"] = org.is_homed(a);
+      ja["origin"] = org.counts[size_t(a)];
       if (scale[size_t(a)] > 0) {
-        ja["position_mm"] = x.pos / scale[size_t(a)] * 1e3;
-        ja["command_mm"] = x.cmd / scale[size_t(a)] * 1e3;
+        ja["position_mm"] = mm_of(a, x.pos);
+        ja["command_mm"] = mm_of(a, x.cmd);
       }
       j["axes"].push_back(ja);
     }
@@ -85,16 +93,16 @@ void status(bool json) {
   std::cout << "drives " << (s.armed() ? "ARMED" : "off") << ", faults: " << fault_names(s.fault)
             << ", interpolator " << ((s.ip_stat >> bb::IS_BUSY & 1) ? "busy" : "idle") << " ("
             << (s.ip_stat & 0xFFFF) << " words queued, " << (s.ip_segs & 0xFFFF) << " segments done)\n";
-  std::snprintf(line, sizeof line, "%-4s %12s %12s %8s %7s %4s %7s %5s %12s\n", "axis", "position", "command",
-                "error", "output", "sat", "enabled", "drive", "position mm");
+  std::snprintf(line, sizeof line, "%-4s %12s %12s %8s %7s %4s %7s %5s %12s %6s\n", "axis", "position",
+                "command", "error", "output", "sat", "enabled", "drive", "machine mm", "homed");
   std::cout << line;
   for (int a = 0; a < s.naxes; ++a) {
     const AxisState& x = s.axes[size_t(a)];
     char mm[32] = "-";
-    if (scale[size_t(a)] > 0) std::snprintf(mm, sizeof mm, "%.4f", x.pos / scale[size_t(a)] * 1e3);
-    std::snprintf(line, sizeof line, "%-4s %12d %12d %8d %7d %4s %7s %5s %12s\n", axis_name(a), int(x.pos),
-                  int(x.cmd), int(x.err), int(x.u), x.sat ? "yes" : "no", x.pid_en ? "yes" : "no",
-                  x.drv_en ? "on" : "off", mm);
+    if (scale[size_t(a)] > 0) std::snprintf(mm, sizeof mm, "%.4f", mm_of(a, x.pos));
+    std::snprintf(line, sizeof line, "%-4s %12d %12d %8d %7d %4s %7s %5s %12s %6s\n", axis_name(a),
+                  int(x.pos), int(x.cmd), int(x.err), int(x.u), x.sat ? "yes" : "no", x.pid_en ? "yes" : "no",
+                  x.drv_en ? "on" : "off", mm, org.is_homed(a) ? "yes" : "no");
     std::cout << line;
   }
   std::snprintf(line, sizeof line,

@@ -29,5 +29,6 @@ void add_gcode_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_serve_command(CLI::App& app);
 void add_level_command(CLI::App& app);
+void add_cycle_commands(CLI::App& app);
 
 }  // namespace mc::host::cli

@@ -115,6 +115,19 @@ std::array<int64_t, 3> arm(BoardLink& l, const Note& note) {
   return at;
 }
 
+std::array<int64_t, 3> abort_interpolator(BoardLink& l) {
+  l.write(br::IP_CTRL, 1u << bb::I_ABORT | 1u << bb::I_CLR);
+  const int naxes = std::min(read_naxes(l), 3);
+  // Read until two rounds agree: the first may still show the sample before.
+  std::array<int64_t, 3> at{}, before{};
+  for (int round = 0; round < 8; ++round) {
+    for (int a = 0; a < naxes; ++a) at[size_t(a)] = int32_t(l.read(br::axis(a, br::AX_CMD)));
+    if (round > 0 && at == before) break;
+    before = at;
+  }
+  return at;
+}
+
 std::array<int64_t, 3> start_position(BoardLink& l) {
   const int naxes = read_naxes(l);
   const bool armed = l.read(br::STATUS) & (1u << bb::ST_ARMED);
@@ -122,6 +135,27 @@ std::array<int64_t, 3> start_position(BoardLink& l) {
   for (int a = 0; a < naxes && a < 3; ++a)
     at[size_t(a)] = int32_t(l.read(br::axis(a, armed ? br::AX_CMD : br::AX_POS)));
   return at;
+}
+
+MachineOrigin read_origin(BoardLink& l) {
+  MachineOrigin o;
+  const int naxes = std::min(read_naxes(l), 3);
+  o.homed = l.read(br::HOMED) & ((1u << naxes) - 1);
+  for (int a = 0; a < naxes; ++a) o.counts[size_t(a)] = int32_t(l.read(br::axis(a, br::AX_ORIGIN)));
+  return o;
+}
+
+void write_origin(BoardLink& l, int a, int64_t counts) {
+  const uint16_t reg = br::axis(a, br::AX_ORIGIN);
+  l.write(reg, uint32_t(int32_t(counts)));
+  const uint32_t homed = l.read(br::HOMED) | 1u << a;
+  l.write(br::HOMED, homed);
+  if (int32_t(l.read(reg)) != counts || l.read(br::HOMED) != homed)
+    throw BoardError("ORIGIN of axis " + std::to_string(a) + " did not read back " + std::to_string(counts));
+}
+
+void clear_homed(BoardLink& l, uint32_t mask) {
+  l.write(br::HOMED, l.read(br::HOMED) & ~mask);
 }
 
 namespace {

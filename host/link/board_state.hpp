@@ -63,10 +63,38 @@ void set_position(BoardLink& l, const std::vector<std::pair<int, int32_t>>& axes
 // and coolant a command left on (the board dropped them when it disarmed)
 // do not start again by themselves. Returns the interpolator position.
 std::array<int64_t, 3> arm(BoardLink& l, const Note& note);
+// Aborts the interpolator (queue flushed, command held) and returns where
+// its command stands, once AX_CMD shows it (from the next PID sample on).
+std::array<int64_t, 3> abort_interpolator(BoardLink& l);
 // Where arm() would start a command, without changing anything: the
 // interpolator's command when armed, else the encoder positions. Commands
 // check a move against the machine's limits from here before they arm.
 std::array<int64_t, 3> start_position(BoardLink& l);
+
+// The machine frame the board keeps for the host (HOMED, ORIGIN): each
+// axis's board count (POS, CMD) at machine zero, and which axes a homing
+// cycle set it for. A board at power-up has none homed and every origin 0,
+// so machine coordinates then count from where the axes were; the frame
+// goes with the board's counts, which is why the board keeps it and no file
+// on the host does.
+struct MachineOrigin {
+  std::array<int64_t, 3> counts{};
+  uint32_t homed = 0;  // bit a: axis a homed
+  bool is_homed(int a) const { return homed >> a & 1; }
+  // Board counts to machine counts and back.
+  std::array<int64_t, 3> machine(const std::array<int64_t, 3>& board) const {
+    return {board[0] - counts[0], board[1] - counts[1], board[2] - counts[2]};
+  }
+  std::array<int64_t, 3> board(const std::array<int64_t, 3>& machine) const {
+    return {machine[0] + counts[0], machine[1] + counts[1], machine[2] + counts[2]};
+  }
+};
+MachineOrigin read_origin(BoardLink& l);
+// Sets axis a's origin and marks it homed, verified by reading back.
+void write_origin(BoardLink& l, int a, int64_t counts);
+// Forgets the homing of the axes in `mask` (origins kept, as a sender's
+// position does not jump): a cycle that fails part way starts it.
+void clear_homed(BoardLink& l, uint32_t mask);
 
 // InputError unless axis a has gains (Kp or Ki nonzero), naming the commands
 // that set them.

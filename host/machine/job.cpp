@@ -18,7 +18,7 @@ using mc::host::InputError;
 using mc::host::Move;
 using mc::host::Vec3d;
 
-mc::host::PlannerConfig planner_config(const MachineConfig& m) {
+mc::host::PlannerConfig planner_config(const MachineConfig& m, const mc::host::Vec3& origin) {
   mc::host::PlannerConfig c;
   for (size_t k = 0; k < m.axes.size() && k < 3; ++k) {
     const AxisConfig& a = m.axes[k];
@@ -29,6 +29,7 @@ mc::host::PlannerConfig planner_config(const MachineConfig& m) {
     l.max_accel_mm_s2 = a.max_accel_m_s2 * 1e3;
     l.min_mm = a.travel_min_m * 1e3;
     l.max_mm = a.travel_max_m * 1e3;
+    l.origin = origin[k];
   }
   c.junction_deviation_mm = m.planner.junction_deviation_m * 1e3;
   c.arc_tolerance_mm = m.planner.arc_tolerance_m * 1e3;
@@ -50,14 +51,14 @@ ProgramErrors::ProgramErrors(std::vector<mc::gcode::Error> errors)
     : std::runtime_error(list(errors)), errors_(std::move(errors)) {}
 
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m, const Vec3d& start,
-                 const HeightMap* level, LevelMethod method) {
+                 const HeightMap* level, LevelMethod method, const mc::host::Vec3& origin) {
   mc::gcode::Options o;
   o.start = start;
   const mc::gcode::ProgramResult prog = mc::gcode::interpret_program(text, name, o);
   if (!prog.ok()) throw ProgramErrors(prog.errors);
   Job j;
   j.file = name;
-  j.cfg = planner_config(m);
+  j.cfg = planner_config(m, origin);
   j.lines = prog.lines;
   std::vector<mc::gcode::CanonCall> calls = prog.calls;
   if (level) {
@@ -72,12 +73,13 @@ Job plan_program(std::string_view text, const std::string& name, const MachineCo
   return j;
 }
 
-Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start, const HeightMap* level) {
+Job plan_job(const std::string& path, const MachineConfig& m, const Vec3d& start, const HeightMap* level,
+             const mc::host::Vec3& origin) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("G-code file", mc::host::quote(path), "a readable file", "cannot open");
   std::ostringstream text;
   text << in.rdbuf();
-  return plan_program(text.str(), path, m, start, level);
+  return plan_program(text.str(), path, m, start, level, LevelMethod::bilinear, origin);
 }
 
 JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note) {
@@ -94,7 +96,12 @@ JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::h
   // Enabling starts the command where the axes are.
   b.at = enable_machine_axes(l, m, b.axes, note);
   arm_following_limits(l, m);  // a runaway trips FERR instead of running on
+  b.origin = mc::host::read_origin(l).counts;
   return b;
+}
+
+Vec3d JobBoard::start_mm(const MachineConfig& m) const {
+  return mc::host::to_mm(at, planner_config(m, origin));
 }
 
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,

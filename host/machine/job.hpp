@@ -19,8 +19,10 @@
 
 namespace mc::machine {
 
-// The planner's limits from the machine (mm, mm/s, mm/s^2).
-mc::host::PlannerConfig planner_config(const MachineConfig& m);
+// The planner's limits from the machine (mm, mm/s, mm/s^2), in the machine
+// frame whose zero is at board counts `origin` (mc::host::MachineOrigin:
+// the board's, once homed).
+mc::host::PlannerConfig planner_config(const MachineConfig& m, const mc::host::Vec3& origin = {});
 
 // Every error of a program, FILE:LINE:COLUMN each (what() lists them all).
 class ProgramErrors : public std::runtime_error {
@@ -50,11 +52,13 @@ struct Job {
 // How a map is applied: split per cell and within the tolerance, or only at
 // each move's end points (the source paper's method, kept for comparison).
 enum class LevelMethod { bilinear, end_points };
+// origin: as planner_config's; the job's segments go to the board in its
+// counts.
 Job plan_job(const std::string& path, const MachineConfig& m, const mc::host::Vec3d& start,
-             const HeightMap* level = nullptr);
+             const HeightMap* level = nullptr, const mc::host::Vec3& origin = {});
 Job plan_program(std::string_view text, const std::string& name, const MachineConfig& m,
                  const mc::host::Vec3d& start, const HeightMap* level = nullptr,
-                 LevelMethod method = LevelMethod::bilinear);
+                 LevelMethod method = LevelMethod::bilinear, const mc::host::Vec3& origin = {});
 
 // A board ready to run a job: every axis of the machine present, gains
 // where the board has none (the machine's, with a note), the drives armed,
@@ -63,8 +67,11 @@ Job plan_program(std::string_view text, const std::string& name, const MachineCo
 // fault other than the watchdog's.
 struct JobBoard {
   std::vector<int> axes;
-  mc::host::Vec3 at{};  // the interpolator's position, counts: where the job starts
-  double ts_s = 0;      // the PID sample period
+  mc::host::Vec3 at{};      // the interpolator's position, counts: where the job starts
+  double ts_s = 0;          // the PID sample period
+  mc::host::Vec3 origin{};  // the board's machine zero (MachineOrigin), counts
+  // at in machine mm, and the planner's limits in that frame.
+  mc::host::Vec3d start_mm(const MachineConfig& m) const;
 };
 JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note);
 

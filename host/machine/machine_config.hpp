@@ -106,9 +106,10 @@ struct AxisConfig {
   double max_accel_m_s2 = 1.0;  // path planner: the axis's acceleration limit
   // The home switch; no [home]: none on the axis's limit input.
   std::optional<HomeConfig> home;
-  // Soft travel limits: machine coordinates the axis may reach (m from where
-  // it was when the board started; no homing yet). jog, move and step refuse
-  // targets beyond them before anything moves.
+  // Soft travel limits: machine coordinates the axis may reach (m from
+  // machine zero once homed, host/machine/cycles.hpp; before, from where it
+  // was when the board started). jog, move and step refuse targets beyond
+  // them before anything moves.
   double travel_min_m = -1.0;
   double travel_max_m = 1.0;
   std::optional<StepperConfig> stepper;  // a stepper axis (else a DC servo on the H-bridge pins)

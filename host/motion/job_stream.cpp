@@ -200,16 +200,9 @@ void JobStreamer::set_overrides(double feed, double rapid) {
 }
 
 Vec3 JobStreamer::abort() {
-  l_.write(br::IP_CTRL, 1u << bb::I_ABORT | 1u << bb::I_CLR);
-  // The command reads the stopped interpolator from the next PID sample on:
-  // read until two rounds agree.
-  Vec3 at{}, before{};
-  for (int round = 0; round < 8; ++round) {
-    for (size_t k = 0; k < 3; ++k)
-      if (cfg_.axes[k].present) at[k] = int32_t(l_.read(br::axis(int(k), br::AX_CMD)));
-    if (round > 0 && at == before) break;
-    before = at;
-  }
+  Vec3 at = abort_interpolator(l_);
+  for (size_t k = 0; k < 3; ++k)
+    if (!cfg_.axes[k].present) at[k] = 0;  // as the plan has them
   restart(at);
   return at;
 }

@@ -167,14 +167,15 @@ double core_rate_limit(const PlannerConfig& cfg) {
 Vec3 to_counts(const Vec3d& p, const PlannerConfig& cfg) {
   Vec3 c{};
   for (size_t k = 0; k < 3; ++k)
-    if (cfg.axes[k].present) c[k] = int64_t(std::llround(p[k] * cfg.axes[k].counts_per_mm));
+    if (cfg.axes[k].present)
+      c[k] = int64_t(std::llround(p[k] * cfg.axes[k].counts_per_mm)) + cfg.axes[k].origin;
   return c;
 }
 
 Vec3d to_mm(const Vec3& c, const PlannerConfig& cfg) {
   Vec3d p{};
   for (size_t k = 0; k < 3; ++k)
-    if (cfg.axes[k].present) p[k] = double(c[k]) / cfg.axes[k].counts_per_mm;
+    if (cfg.axes[k].present) p[k] = double(c[k] - cfg.axes[k].origin) / cfg.axes[k].counts_per_mm;
   return p;
 }
 

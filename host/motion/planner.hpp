@@ -36,6 +36,9 @@ struct AxisLimits {
   double max_rate_mm_s = 0;
   double max_accel_mm_s2 = 0;
   double min_mm = 0, max_mm = 0;  // travel, machine coordinates
+  // The board count at machine zero (the board's ORIGIN once homed, else 0:
+  // machine coordinates count from where the axis was at power-up).
+  int64_t origin = 0;
 };
 
 struct PlannerConfig {
@@ -130,7 +133,8 @@ struct PathPoint {
 };
 PathPoint piece_end(const std::vector<Move>& moves, const Piece& piece, const PlannerConfig& cfg);
 
-// mm -> counts, rounded per axis (absent axes 0).
+// Machine mm -> board counts, rounded per axis, and back (absent axes 0):
+// positions, so each axis's origin is added or taken off.
 Vec3 to_counts(const Vec3d& p, const PlannerConfig& cfg);
 Vec3d to_mm(const Vec3& c, const PlannerConfig& cfg);
 
