@@ -86,12 +86,9 @@ struct Rig {
     at = to;
     size_t sent = 0;
     while (sent < segs.size()) {
-      std::vector<seg::Words> batch;
-      for (size_t i = sent; i < segs.size() && batch.size() < 6; ++i) batch.push_back(seg::pack(segs[i].seg));
-      if (link.segments(batch))
-        sent += batch.size();
-      else
-        link.poll(std::chrono::milliseconds(1));
+      const size_t before = sent;
+      sent = host::send_segments(link, segs, sent);
+      if (sent == before) link.poll(std::chrono::milliseconds(1));
     }
     for (const double end = board.board_seconds() + max_s; board.board_seconds() < end;) {
       const uint32_t ip = link.read(br::IP_STAT);

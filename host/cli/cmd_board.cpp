@@ -144,8 +144,8 @@ void move_to(BoardLink& l, const std::function<Vec3(const Vec3&, const std::arra
   std::string line = "done:";
   for (int a = 0; a < 3; ++a) {
     if (scale[size_t(a)] == 0) continue;
-    const double pos_mm = double(r.pos[size_t(a)] - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3,
-                 cmd_mm = double(r.to[size_t(a)] - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3;
+    const double pos_mm = org.mm(a, r.pos[size_t(a)], scale[size_t(a)]),
+                 cmd_mm = org.mm(a, r.to[size_t(a)], scale[size_t(a)]);
     j["axes"].push_back({{"axis", axis_name(a)}, {"position_mm", pos_mm}, {"command_mm", cmd_mm}});
     char b[96];
     std::snprintf(b, sizeof b, " %s %.4f mm (command %.4f)", axis_name(a), pos_mm, cmd_mm);

@@ -53,9 +53,8 @@ void home(const std::string& axis, bool json) {
   for (const auto& pass : plan.passes)
     for (const auto& x : pass) {
       const int a = x.axis;
-      const double cpmm = mc::machine::counts_per_m(m.axes[size_t(a)]) * 1e-3;
-      const double at_mm =
-          double(int32_t(l.read(board::reg::axis(a, board::reg::AX_POS))) - org.counts[size_t(a)]) / cpmm;
+      const double at_mm = org.mm(a, int32_t(l.read(board::reg::axis(a, board::reg::AX_POS))),
+                                  mc::machine::counts_per_m(m.axes[size_t(a)]));
       j.push_back({{"axis", axis_name(a)},
                    {"origin", org.counts[size_t(a)]},
                    {"switch_mm", x.switch_mm},
@@ -101,7 +100,7 @@ void probe(const ProbeOptions& o) {
   while (!c.poll()) mc::machine::wait_on_link(l);
   if (!c.contact())
     throw mc::machine::CycleError(5, "probe: no contact within " + format_number(o.distance_mm) + " mm");
-  const double touch_mm = double(c.position()[size_t(a)] - org.counts[size_t(a)]) / cpmm;
+  const double touch_mm = org.mm(a, c.position()[size_t(a)], cpmm * 1e3);
   // Back off the plate so that it can be taken away.
   Vec3 back = c.end();
   back[size_t(a)] += mc::machine::counts_of(o.retract_mm, cpmm * 1e3);

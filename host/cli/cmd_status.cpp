@@ -34,9 +34,6 @@ void status(bool json) {
   // Counts are the board's (from power-up); mm are machine coordinates,
   // from the origin a homing cycle set (none: from power-up as well).
   const MachineOrigin org = read_origin(*b.link);
-  const auto mm_of = [&](int a, int32_t counts) {
-    return double(counts - org.counts[size_t(a)]) / scale[size_t(a)] * 1e3;
-  };
   if (json) {
     nlohmann::ordered_json j;
     j["port"] = b.port->name();
@@ -73,8 +70,8 @@ void status(bool json) {
       ja["homed"] = org.is_homed(a);
       ja["origin"] = org.counts[size_t(a)];
       if (scale[size_t(a)] > 0) {
-        ja["position_mm"] = mm_of(a, x.pos);
-        ja["command_mm"] = mm_of(a, x.cmd);
+        ja["position_mm"] = org.mm(a, x.pos, scale[size_t(a)]);
+        ja["command_mm"] = org.mm(a, x.cmd, scale[size_t(a)]);
       }
       j["axes"].push_back(ja);
     }
@@ -99,7 +96,7 @@ void status(bool json) {
   for (int a = 0; a < s.naxes; ++a) {
     const AxisState& x = s.axes[size_t(a)];
     char mm[32] = "-";
-    if (scale[size_t(a)] > 0) std::snprintf(mm, sizeof mm, "%.4f", mm_of(a, x.pos));
+    if (scale[size_t(a)] > 0) std::snprintf(mm, sizeof mm, "%.4f", org.mm(a, x.pos, scale[size_t(a)]));
     std::snprintf(line, sizeof line, "%-4s %12d %12d %8d %7d %4s %7s %5s %12s %6s\n", axis_name(a),
                   int(x.pos), int(x.cmd), int(x.err), int(x.u), x.sat ? "yes" : "no", x.pid_en ? "yes" : "no",
                   x.drv_en ? "on" : "off", mm, org.is_homed(a) ? "yes" : "no");

@@ -24,12 +24,8 @@ constexpr int kAlarmHardLimit = 1;
 constexpr int kAlarmSoftLimit = 2;
 constexpr int kAlarmAbortCycle = 3;
 constexpr int kAlarmProbeContact = 5;
-// The band in which an axis counts as arrived (counts): a servo settles on
-// its command within a few counts, and senders compare MPos with the
-// program's end point to the micrometre they print.
-constexpr int64_t kInPosition = 2;
-// A servo that cannot settle (a stuck axis) must not hold a sender forever.
-constexpr std::chrono::milliseconds kSettleTimeout{500};
+using mc::host::kInPosition;
+using mc::host::kSettleTimeout;
 
 bool limit_fault(uint32_t bits) {
   return bits & (0x7u << bb::F_LIMIT_LSB);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -63,6 +64,14 @@ void set_position(BoardLink& l, const std::vector<std::pair<int, int32_t>>& axes
 // and coolant a command left on (the board dropped them when it disarmed)
 // do not start again by themselves. Returns the interpolator position.
 std::array<int64_t, 3> arm(BoardLink& l, const Note& note);
+// A stopped axis counts as arrived within kInPosition counts of its
+// command (a servo settles there within a few counts; senders compare the
+// position with the program's end point to the micrometre they print), or
+// kSettleTimeout after the command stopped: a stuck axis must not hold
+// anything forever.
+constexpr int32_t kInPosition = 2;
+constexpr std::chrono::milliseconds kSettleTimeout{500};
+
 // Aborts the interpolator (queue flushed, command held) and returns where
 // its command stands, once AX_CMD shows it (from the next PID sample on).
 std::array<int64_t, 3> abort_interpolator(BoardLink& l);
@@ -87,6 +96,10 @@ struct MachineOrigin {
   }
   std::array<int64_t, 3> board(const std::array<int64_t, 3>& machine) const {
     return {machine[0] + counts[0], machine[1] + counts[1], machine[2] + counts[2]};
+  }
+  // Axis a's board count as machine mm, at counts_per_m.
+  double mm(int a, int64_t board, double counts_per_m) const {
+    return double(board - counts[size_t(a)]) / counts_per_m * 1e3;
   }
 };
 MachineOrigin read_origin(BoardLink& l);

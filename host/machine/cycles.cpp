@@ -27,27 +27,18 @@ constexpr int kAlarmNotFound = 9;
 constexpr double kSearchScale = 1.5;
 constexpr double kLocateScale = 5.0;
 
-// A stopped axis counts as arrived within this many counts of its command
-// (as the Grbl server's Idle), or after kSettleTimeout: a stuck axis must
-// not hold a cycle forever.
-constexpr int32_t kInPosition = 2;
-constexpr std::chrono::milliseconds kSettleTimeout{500};
-
 std::string axis_letter(int a) {
   return std::string(1, "XYZ"[a]);
 }
 
+// LATCH: `axes` latch on the source and stop the interpolator; the others
+// (every axis with Source::none) latch on nothing.
 uint32_t latch_word(LatchedMove::Source src, unsigned axes, bool probe_inv) {
-  uint32_t v = 0;
-  for (int a = 0; a < 3; ++a) {
-    uint32_t s = bb::L_SRC_NONE;
-    if (axes >> a & 1) s = src == LatchedMove::Source::home ? bb::L_SRC_HOME : bb::L_SRC_PROBE;
-    if (src == LatchedMove::Source::none) s = bb::L_SRC_NONE;
-    v |= s << (bb::L_SRC_LSB + 2 * a);
-  }
-  if (src != LatchedMove::Source::none) v |= 1u << bb::L_STOP;
-  if (probe_inv) v |= 1u << bb::L_PROBE_INV;
-  return v;
+  if (src == LatchedMove::Source::none) axes = 0;
+  const uint32_t on = src == LatchedMove::Source::home ? bb::L_SRC_HOME : bb::L_SRC_PROBE;
+  uint32_t v = axes ? 1u << bb::L_STOP : 0;
+  for (int a = 0; a < 3; ++a) v |= (axes >> a & 1 ? on : bb::L_SRC_NONE) << (bb::L_SRC_LSB + 2 * a);
+  return probe_inv ? v | 1u << bb::L_PROBE_INV : v;
 }
 
 }  // namespace
@@ -90,12 +81,7 @@ bool LatchedMove::poll() {
     const unsigned got = seen();
     // Nothing more goes out once a latch stopped the interpolator: what the
     // stop flushed must not run after it.
-    if (!got && sent_ < segs_.size()) {
-      std::vector<seg::Words> batch;
-      for (size_t i = sent_; i < segs_.size() && batch.size() < 6; ++i)
-        batch.push_back(seg::pack(segs_[i].seg));
-      if (l_.segments(batch)) sent_ += batch.size();
-    }
+    if (!got) sent_ = mc::host::send_segments(l_, segs_, sent_);
     const uint32_t ip = l_.read(br::IP_STAT);
     const bool busy = ip >> bb::IS_BUSY & 1, queued = (ip & 0xFFFF) != 0;
     const size_t done = (l_.read(br::IP_SEGS) - segs0_) & 0xFFFF;
@@ -105,10 +91,10 @@ bool LatchedMove::poll() {
     } else if (sent_ < segs_.size() || done < segs_.size() || busy) {
       return false;
     } else {
-      end_ = s_.to;
+      end_ = segs_.empty() ? s_.from : s_.to;
     }
     settling_ = true;
-    settle_until_ = l_.now() + kSettleTimeout;
+    settle_until_ = l_.now() + mc::host::kSettleTimeout;
   }
   // The axes catch up with the stopped command before anything is judged:
   // a servo runs behind its command, and an axis whose switch it reaches
@@ -116,7 +102,7 @@ bool LatchedMove::poll() {
   bool in = true;
   for (int a = 0; a < 3; ++a)
     if (s_.moving_axes >> a & 1)
-      in = in && std::abs(int32_t(l_.read(br::axis(a, br::AX_FOLLOW)))) <= kInPosition;
+      in = in && std::abs(int32_t(l_.read(br::axis(a, br::AX_FOLLOW)))) <= mc::host::kInPosition;
   if (!in && l_.now() < settle_until_) return false;
   latched_ = seen();
   for (int a = 0; a < 3; ++a)
@@ -193,13 +179,6 @@ bool HomingCycle::switch_closed(int a) {
   return l_.read(br::IO_STAT) >> (bb::IOS_HOME_LSB + a) & 1;
 }
 
-double HomingCycle::parked_mm(int a) const {
-  for (const auto& pass : plan_.passes)
-    for (const HomeAxis& x : pass)
-      if (x.axis == a) return x.switch_mm - x.direction * x.pull_off_mm;
-  return 0;
-}
-
 void HomingCycle::start_move(const std::vector<const HomeAxis*>& axes, int sign, Reach reach, bool locate,
                              LatchedMove::Source src) {
   const auto distance_mm = [&](const HomeAxis& x) {
@@ -264,7 +243,6 @@ void HomingCycle::start_phase(Phase p) {
       for (const HomeAxis& x : pass) axes.push_back(&x);
       start_move(axes, -1, Reach::pull_off, false, LatchedMove::Source::none);
       return;
-    case Phase::pause:
     case Phase::done:
       return;
   }
@@ -282,23 +260,8 @@ void HomingCycle::restore() {
   l_.write(br::SAFETY, safety0_);
 }
 
-void HomingCycle::abort() {
-  if (phase_ == Phase::done) return;
-  mc::host::abort_interpolator(l_);
-  restore();
-  phase_ = Phase::done;
-}
-
 bool HomingCycle::poll() {
   if (phase_ == Phase::done) return true;
-  if (phase_ == Phase::pause) {
-    if (l_.now() < pause_until_) {
-      l_.read(br::STATUS);  // the link stays alive
-      return false;
-    }
-    start_phase(after_pause_);
-    return phase_ == Phase::done;
-  }
   try {
     if (!move_->poll()) return false;
   } catch (...) {
@@ -358,16 +321,8 @@ bool HomingCycle::poll() {
       }
       next = Phase::clear;
       break;
-    case Phase::pause:
     case Phase::done:
       break;
-  }
-  if (plan_.debounce_s > 0) {
-    after_pause_ = next;
-    phase_ = Phase::pause;
-    pause_until_ = l_.now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                  std::chrono::duration<double>(plan_.debounce_s));
-    return false;
   }
   start_phase(next);
   return false;

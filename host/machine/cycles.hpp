@@ -91,7 +91,6 @@ struct HomeAxis {
 };
 struct HomingPlan {
   std::vector<std::vector<HomeAxis>> passes;  // lowest order first; one pass homes its axes together
-  double debounce_s = 0;                      // a pause after each stop (Grbl's $26)
   double search_mm[3] = {0, 0, 0};            // the seek gives up after this (1.5 x the travel, as Grbl)
 };
 // The plan for the axes in `mask` (bit 0 X): every one needs its [home]
@@ -116,16 +115,11 @@ class HomingCycle {
   // One round; true when every pass is done. CycleError, BoardError: the
   // cycle failed (SAFETY and LATCH are restored first).
   bool poll();
-  // Stops it where it is (a soft reset): the interpolator aborted, SAFETY
-  // and LATCH restored, nothing more homed.
-  void abort();
   // After completion: the origins set (board counts, per axis).
   const mc::host::Vec3& origin() const { return origin_; }
-  // The machine position the cycle left each homed axis at, mm.
-  double parked_mm(int a) const;
 
  private:
-  enum class Phase { clear, seek, pull_off, locate, park, pause, done };
+  enum class Phase { clear, seek, pull_off, locate, park, done };
   // How far a move goes: the search distance, 5 x the pull-off (Grbl's
   // locate scalar), the pull-off.
   enum class Reach { search, locate, pull_off };
@@ -143,12 +137,11 @@ class HomingCycle {
   HomingPlan plan_;
   uint32_t safety0_ = 0, latch0_ = 0;
   size_t pass_ = 0;
-  Phase phase_ = Phase::clear, after_pause_ = Phase::clear;
+  Phase phase_ = Phase::clear;
   std::optional<LatchedMove> move_;
   unsigned pending_ = 0;  // axes of the pass still to latch in this phase
   mc::host::Vec3 at_{};   // the command, board counts
   mc::host::Vec3 latch_{}, origin_{};
-  std::chrono::steady_clock::time_point pause_until_{};
   bool restored_ = false;
 };
 

@@ -100,10 +100,6 @@ JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::h
   return b;
 }
 
-Vec3d JobBoard::start_mm(const MachineConfig& m) const {
-  return mc::host::to_mm(at, planner_config(m, origin));
-}
-
 mc::host::ErrorStats contour_error(const std::vector<mc::host::JobSample>& samples,
                                    const std::vector<Move>& moves, const mc::host::PlannerConfig& cfg) {
   std::vector<std::array<int32_t, 3>> cmd;

@@ -70,8 +70,6 @@ struct JobBoard {
   mc::host::Vec3 at{};      // the interpolator's position, counts: where the job starts
   double ts_s = 0;          // the PID sample period
   mc::host::Vec3 origin{};  // the board's machine zero (MachineOrigin), counts
-  // at in machine mm, and the planner's limits in that frame.
-  mc::host::Vec3d start_mm(const MachineConfig& m) const;
 };
 JobBoard ready_board(mc::host::BoardLink& l, const MachineConfig& m, const mc::host::Note& note);
 

@@ -30,7 +30,8 @@ LevelComparison compare_levelling(mc::host::BoardLink& l, const MachineConfig& m
     note(std::string("engraving, levelling: ") + v.name);
     const JobBoard jb = ready_board(l, m, note);
     const mc::host::PlannerConfig cfg = planner_config(m, jb.origin);
-    const Job j = plan_program(c.program, "engraving", m, jb.start_mm(m), v.map, v.method, jb.origin);
+    const Job j =
+        plan_program(c.program, "engraving", m, mc::host::to_mm(jb.at, cfg), v.map, v.method, jb.origin);
     mc::host::StreamOptions so;
     so.queue_ahead_s = m.planner.queue_ahead_s;
     for (int a : jb.axes) so.telemetry_axes |= 1u << a;

@@ -33,6 +33,13 @@ std::vector<PlannedSegment> plan_move(const Vec3& from, const Vec3& to, double f
   return v;
 }
 
+size_t send_segments(BoardLink& l, const std::vector<PlannedSegment>& segs, size_t sent) {
+  if (sent >= segs.size()) return sent;
+  std::vector<seg::Words> batch;
+  for (size_t i = sent; i < segs.size() && batch.size() < 6; ++i) batch.push_back(seg::pack(segs[i].seg));
+  return l.segments(batch) ? sent + batch.size() : sent;
+}
+
 void run_segments(BoardLink& l, const std::vector<PlannedSegment>& segs,
                   const std::function<void(int, int)>& progress) {
   using Clock = std::chrono::steady_clock;
@@ -46,11 +53,7 @@ void run_segments(BoardLink& l, const std::vector<PlannedSegment>& segs,
   size_t sent = 0;
   int last_done = -1;
   for (;;) {
-    if (sent < segs.size()) {
-      std::vector<seg::Words> batch;
-      for (size_t i = sent; i < segs.size() && batch.size() < 6; ++i) batch.push_back(seg::pack(segs[i].seg));
-      if (l.segments(batch)) sent += batch.size();
-    }
+    sent = send_segments(l, segs, sent);
     const uint32_t fault = l.read(br::FAULT);
     if (fault) throw BoardError("motion stopped by a fault: " + fault_names(fault));
     const int done = int((l.read(br::IP_SEGS) - segs0) & 0xFFFF);

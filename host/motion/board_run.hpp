@@ -12,6 +12,10 @@
 
 namespace mc::host {
 
+// Queues what the board's queue takes of segs[sent..] (one frame: up to six
+// segments); returns the new count sent.
+size_t send_segments(BoardLink& l, const std::vector<PlannedSegment>& segs, size_t sent);
+
 // Queues the segments (waiting while the queue is full), then polls until
 // the interpolator has finished them, keeping the watchdog fed. Throws
 // BoardError when a fault stops the motion. progress(done, total).
