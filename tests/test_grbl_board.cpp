@@ -25,6 +25,7 @@
 #include "host/grbl/protocol.hpp"
 #include "host/grbl/settings.hpp"
 #include "host/link/board_link.hpp"
+#include "host/link/board_state.hpp"
 #include "host/machine/board_setup.hpp"
 #include "host/machine/job.hpp"
 #include "sim/vboard/board_stream.hpp"
@@ -70,7 +71,11 @@ struct InProcessBoard {
 
 class BoardRig {
  public:
-  explicit BoardRig(machine::MachineConfig m = machine::default_machine()) : ib_(std::move(m)) {
+  // before: what the board has been through before the server starts.
+  explicit BoardRig(machine::MachineConfig m = machine::default_machine(),
+                    const std::function<void(host::BoardLink&)>& before = {})
+      : ib_(std::move(m)) {
+    if (before) before(link_);
     backend_ = std::make_unique<BoardBackend>(link_, m_);
     EngineOptions o;
     o.stored.settings = default_settings(m_);
@@ -188,6 +193,25 @@ TEST(GrblBoard, StreamedJobRunsOnTimeAndEndsAtItsEndPoint) {
   EXPECT_GT(took, 0.95 * planned);
   rig.run_for(0.2);  // the servo settles
   expect_at(rig.status(), 5, 5, -0.2);
+}
+
+// A board homed before the server started: MPos and the program are
+// machine coordinates, from its origin (ORIGIN), as `motionctl run` plans.
+TEST(GrblBoard, PositionsAreMachineCoordinatesFromTheBoardsOrigin) {
+  // X's zero 10 mm behind where the board started, Y's 5 mm ahead.
+  BoardRig rig(machine::default_machine(), [](host::BoardLink& l) {
+    host::write_origin(l, 0, 4000);
+    host::write_origin(l, 1, -2000);
+  });
+  rig.run_for(0.1);
+  expect_at(rig.status(), -10, 5, 0);
+  rig.stream({"G21 G90 G1 X1 Y-1 F3000"}, 10);
+  ASSERT_TRUE(rig.run_until_state("Idle", 10));
+  rig.run_for(0.2);  // the servo settles
+  expect_at(rig.status(), 1, -1, 0);
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(0, br::AX_CMD))), 4400) << "board counts: origin + 1 mm";
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(1, br::AX_CMD))), -2400);
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
 }
 
 // The stepper router (configs/stepper_router.toml) runs a job from a

@@ -45,14 +45,12 @@ uint32_t watchdog_cycles(double period_s, double clock_hz) {
 
 BoardBackend::BoardBackend(mc::host::BoardLink& l, const mc::machine::MachineConfig& m, int planner_blocks,
                            const mc::host::Note& note, double watchdog_s)
-    : l_(l),
-      machine_(m),
-      base_(mc::machine::planner_config(m)),
-      cfg_(base_),
-      blocks_(planner_blocks),
-      note_(note) {
+    : l_(l), machine_(m), blocks_(planner_blocks), note_(note) {
   if (watchdog_s > 0) l_.write(br::WDOG, watchdog_cycles(watchdog_s, m.clock_hz));
   const mc::machine::JobBoard b = mc::machine::ready_board(l_, machine_, note_);
+  // MPos and every line in machine coordinates: from the board's machine
+  // zero once homed, as `motionctl run` plans.
+  base_ = cfg_ = mc::machine::planner_config(m, b.origin);
   s_ = std::make_unique<JobStreamer>(l_, cfg_, b.at, m.planner.queue_ahead_s);
   s_->on_action = [this](const mc::host::Move& mv) { action(mv); };
   armed_ = true;
@@ -206,7 +204,7 @@ void BoardBackend::read_positions() {
   for (size_t k = 0; k < 3; ++k) {
     if (!cfg_.axes[k].present) continue;
     const int32_t c = int32_t(l_.read(br::axis(int(k), br::AX_POS)));
-    pos_[k] = double(c) / cfg_.axes[k].counts_per_mm;
+    pos_[k] = double(c - cfg_.axes[k].origin) / cfg_.axes[k].counts_per_mm;
     in = in && std::llabs(int64_t(c) - cmd[k]) <= kInPosition;
   }
   const JobStreamer::State st = s_->state();

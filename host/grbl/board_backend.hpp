@@ -9,8 +9,10 @@
 // board has done, more segments, the axes' positions), never waiting for the
 // motion, so `?` is answered while a job runs. Board faults become alarms
 // naming the fault; the drives are armed again with the next line once the
-// fault's cause is gone. Spindle and coolant are recorded only (the board
-// has no outputs for them yet); probing and homing are not run yet.
+// fault's cause is gone. Spindle and coolant drive the board's IO_CTRL in
+// order with the motion. Positions are machine coordinates from the board's
+// origin (ORIGIN, set by `motionctl home`); probing and $H are not run here
+// yet.
 #pragma once
 
 #include <chrono>
