@@ -18,6 +18,7 @@
 #include "host/link/board_state.hpp"
 #include "host/machine/cycles.hpp"
 #include "host/machine/job.hpp"
+#include "host/machine/probe_grid.hpp"
 #include "host/machine/workpiece.hpp"
 #include "sim/vboard/board_stream.hpp"
 #include "sim/vboard/virtual_board.hpp"
@@ -213,6 +214,53 @@ TEST(Probing, AProbeAlreadyTouchingIsAlarmFour) {
   const double face = machine::surface_z_mm(*m.workpiece, 50, 50) * cpm(m, 2) * 1e-3;
   EXPECT_LE(std::fabs(double(p.position()[2]) - (face - (-0.01 * cpm(m, 2)))), 2.0)
       << "opened at the face (board counts from the start 10 mm below it)";
+}
+
+// level probe's grid: every height of the map is the face's under the
+// point, relative to the first point's, within the two contacts' counts;
+// the map is the one a perfect probe takes (sample_height_map) as closely.
+TEST(Probing, AGridMapsTheFaceRelativeToItsFirstPoint) {
+  const machine::MachineConfig m = load("default.toml");
+  const machine::WorkpieceConfig& w = *m.workpiece;
+  Rig r(m, {0, 0, 0.003}, 23);  // 3 mm above the plate's corner: machine X, Y are the plant's
+  machine::ProbeGridOptions o;
+  o.nx = 3;
+  o.ny = 2;
+  o.x0 = 20;
+  o.y0 = 20;
+  o.x1 = 180;
+  o.y1 = 130;
+  int calls = 0;
+  const machine::ProbedGrid g = machine::probe_grid(r.link, m, o, {}, [&](int done, int total) {
+    EXPECT_EQ(done, ++calls);
+    EXPECT_EQ(total, 6);
+  });
+  EXPECT_EQ(calls, 6);
+  ASSERT_EQ(g.map.nx, 3);
+  ASSERT_EQ(g.map.ny, 2);
+  EXPECT_DOUBLE_EQ(g.map.x1(), 180);
+  EXPECT_DOUBLE_EQ(g.map.y1(), 130);
+  const double count_mm = 1e3 / cpm(m, 2);
+  // Machine Z counts from where Z started, 3 mm above the plant's 0.
+  const double z0 = machine::surface_z_mm(w, 20, 20);
+  EXPECT_NEAR(g.z0_mm, z0 - 3, count_mm + 1e-9);
+  double worst = 0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 3; ++i) {
+      const double want = machine::surface_z_mm(w, 20 + 80 * i, 20 + 110 * j) - z0;
+      worst = std::max(worst, std::fabs(g.map.at(i, j) - want));
+      EXPECT_NEAR(g.map.at(i, j), want, 2 * count_mm + 1e-9) << "point " << i << ", " << j;
+    }
+  EXPECT_EQ(g.map.at(0, 0), 0);
+  std::printf("6-point grid: worst |map - face| = %.2f um (a Z count is %.2f um)\n", worst * 1e3,
+              count_mm * 1e3);
+  // The tool ends clear of the work: the probe open.
+  EXPECT_FALSE(machine::probe_closed(r.link));
+  // A grid too large for the travel is refused before anything moves.
+  o.x1 = 400;
+  const int32_t x_before = int32_t(r.link.read(br::axis(0, br::AX_CMD)));
+  EXPECT_THROW(machine::probe_grid(r.link, m, o), host::InputError);
+  EXPECT_EQ(int32_t(r.link.read(br::axis(0, br::AX_CMD))), x_before);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 // resets behave as Grbl's.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +29,7 @@
 #include "host/link/board_state.hpp"
 #include "host/machine/board_setup.hpp"
 #include "host/machine/job.hpp"
+#include "host/machine/workpiece.hpp"
 #include "sim/vboard/board_stream.hpp"
 #include "sim/vboard/virtual_board.hpp"
 
@@ -64,17 +66,22 @@ struct InProcessBoard {
   sim::VirtualBoard board{m};
   sim::BoardStream stream{board};
   host::BoardLink link{stream};
-  explicit InProcessBoard(machine::MachineConfig mc = machine::default_machine()) : m(std::move(mc)) {
+  explicit InProcessBoard(machine::MachineConfig mc = machine::default_machine(),
+                          const std::array<double, 3>& start_m = {})
+      : m(std::move(mc)) {
+    for (int a = 0; a < board.configured_axes(); ++a) board.start_at(a, start_m[size_t(a)]);
     link.connect();
   }
 };
 
 class BoardRig {
  public:
-  // before: what the board has been through before the server starts.
+  // before: what the board has been through before the server starts;
+  // start_m: where the tables stand at power-up (the plant's frame).
   explicit BoardRig(machine::MachineConfig m = machine::default_machine(),
-                    const std::function<void(host::BoardLink&)>& before = {})
-      : ib_(std::move(m)) {
+                    const std::function<void(host::BoardLink&)>& before = {},
+                    const std::array<double, 3>& start_m = {})
+      : ib_(std::move(m), start_m) {
     if (before) before(link_);
     backend_ = std::make_unique<BoardBackend>(link_, m_);
     EngineOptions o;
@@ -419,18 +426,175 @@ TEST(GrblBoard, BoardFaultIsAnAlarmNamingItAndTheNextLineRearms) {
   EXPECT_EQ(rig.status().rpm, 0);
 }
 
-TEST(GrblBoard, ProbesAndHomingAreRefusedClearly) {
-  BoardRig rig;
-  rig.send("G38.2 Z-5 F100\n");
-  rig.run_for(0.01);
-  EXPECT_NE(rig.out().find("ALARM:5"), std::string::npos) << rig.out();
-  EXPECT_NE(rig.out().find("[MSG:Probing (G38.x) is not run on the board yet"), std::string::npos)
-      << rig.out();
-  EXPECT_EQ(rig.status().mpos[2], 0);
-  rig.send("$X\n");
+// $H on the board: the homing cycle of the machine file's [home] tables
+// ($25 changed by the sender speeds up every axis's seek), reported as
+// Home, then Idle with MPos in the new machine frame, and a move to machine
+// zero takes the tables to where the plant's switches put it.
+TEST(GrblBoard, HomingSetsMachineZeroFromTheSwitches) {
+  const std::array<double, 3> start = {0.12, -0.05, -0.01};  // m, the plant's frame
+  BoardRig rig(machine::default_machine(), {}, start);
   const size_t from = rig.out().size();
   rig.send("$H\n");
-  EXPECT_NE(rig.out().find("error:5", from), std::string::npos) << rig.out().substr(from);
+  EXPECT_NE(rig.out().find("error:5", from), std::string::npos) << "$22=0: " << rig.out().substr(from);
+  rig.send("$22=1\n$25=9000\n");
+  const size_t homing = rig.out().size();
+  const double t0 = rig.now();
+  rig.send("$H\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().state == "Home"; }, 1));
+  ASSERT_TRUE(rig.run_until(
+      [&] {
+        return rig.out().find("ok", homing) != std::string::npos ||
+               rig.out().find("ALARM") != std::string::npos;
+      },
+      60))
+      << "homing did not end within 60 s of board time";
+  ASSERT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+  // Y alone seeks 340 mm: 17 s at the file's 20 mm/s, 2.3 s at $25's 150
+  // (the locates, at the file's 1 mm/s, take about 2 s per pass).
+  EXPECT_LT(rig.now() - t0, 10) << "$25 did not speed up the seek";
+  std::printf("$H from (120, -50, -10) mm with $25=9000: %.2f s of board time\n", rig.now() - t0);
+  EXPECT_EQ(rig.status().state, "Idle");
+  // Parked pull_off off each switch: X and Y at 290 - 2 mm, Z at 15 - 2.
+  expect_at(rig.status(), 288, 288, 13, 3 * kCount);
+  const host::MachineOrigin o = host::read_origin(rig.link());
+  EXPECT_EQ(o.homed, 7u);
+  for (int a = 0; a < 3; ++a) {
+    const double cpm = machine::counts_per_m(rig.machine().axes[size_t(a)]);
+    EXPECT_LE(std::fabs(double(o.counts[size_t(a)]) + start[size_t(a)] * cpm), 1.0)
+        << "axis " << a << ": machine zero at the plant's zero within a count";
+  }
+  EXPECT_EQ(rig.link().read(br::SAFETY), board::bits::SAFETY_DEFAULT) << "limits back on";
+  rig.stream({"G90 G0 X0 Y0 Z0"}, 10);
+  ASSERT_TRUE(rig.run_until_state("Idle", 10));
+  rig.run_for(0.2);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(rig.board().position_m(a), 0, 3e-6) << "axis " << a;
+  EXPECT_EQ(rig.out().find("error", homing), std::string::npos) << rig.out().substr(homing);
+}
+
+// A reset while homing stops it: ALARM:6 as Grbl, the limits back on, and
+// nothing left half homed.
+TEST(GrblBoard, ResetDuringHomingIsAlarmSixAndRestoresTheLimits) {
+  BoardRig rig(machine::default_machine(), {}, {0.1, 0.1, 0});
+  rig.send("$22=1\n$H\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().state == "Home"; }, 1));
+  rig.run_for(0.3);
+  rig.send("\x18");
+  EXPECT_NE(rig.out().find("ALARM:6"), std::string::npos) << rig.out();
+  EXPECT_EQ(rig.link().read(br::SAFETY), board::bits::SAFETY_DEFAULT);
+  EXPECT_EQ(rig.link().read(br::LATCH), 0u);
+  EXPECT_EQ(host::read_origin(rig.link()).homed, 0u);
+  rig.run_for(0.1);
+  EXPECT_EQ(rig.status().state, "Alarm");
+}
+
+// G38.x on the board: the probe latches every axis on the board, [PRB:]
+// reports it in machine coordinates, and Grbl's alarms 4 and 5 come where
+// Grbl raises them.
+TEST(GrblBoard, ProbingReportsWhereTheProbeChanged) {
+  // The tool 2 mm above the plate at (50, 50) mm: MPos 0 there (not homed).
+  BoardRig rig(machine::default_machine(), {}, {0.05, 0.05, 0.002});
+  const machine::WorkpieceConfig& w = *rig.machine().workpiece;
+  const double face = machine::surface_z_mm(w, 50, 50) - 2.0;  // MPos Z of the face
+  const auto prb = [&](size_t from) {
+    std::smatch m;
+    const std::string tail = rig.out().substr(from);
+    EXPECT_TRUE(std::regex_search(tail, m, std::regex(R"(\[PRB:([-0-9.]+),([-0-9.]+),([-0-9.]+):([01])\])")))
+        << tail;
+    return m.empty()
+               ? std::array<double, 4>{}
+               : std::array<double, 4>{std::stod(m[1]), std::stod(m[2]), std::stod(m[3]), std::stod(m[4])};
+  };
+  const auto answered = [&](size_t from) {
+    return [&rig, from] {
+      return rig.out().find("ok", from) != std::string::npos ||
+             rig.out().find("ALARM", from) != std::string::npos;
+    };
+  };
+  // Not far enough: G38.2 is ALARM:5, G38.3 only reports no contact.
+  size_t from = rig.out().size();
+  rig.send("G21 G90 G38.2 Z-1 F300\n");
+  ASSERT_TRUE(rig.run_until(answered(from), 5));
+  EXPECT_EQ(rig.status().state, "Alarm");
+  EXPECT_NE(rig.out().find("ALARM:5", from), std::string::npos) << rig.out().substr(from);
+  EXPECT_NEAR(prb(from)[2], -1, kCount);
+  EXPECT_EQ(prb(from)[3], 0);
+  rig.send("$X\n");
+  from = rig.out().size();
+  rig.send("G38.3 Z-1.5 F300\n");
+  ASSERT_TRUE(rig.run_until(answered(from), 5));
+  EXPECT_EQ(rig.out().find("ALARM", from), std::string::npos) << rig.out().substr(from);
+  EXPECT_EQ(prb(from)[3], 0);
+  // Down to the face: the latched Z is the face's count.
+  from = rig.out().size();
+  rig.send("G38.2 Z-5 F300\n");
+  ASSERT_TRUE(rig.run_until(answered(from), 5));
+  const std::array<double, 4> hit = prb(from);
+  EXPECT_EQ(hit[3], 1) << rig.out().substr(from);
+  EXPECT_NEAR(hit[0], 0, 3 * kCount);
+  EXPECT_NEAR(hit[1], 0, 3 * kCount);
+  EXPECT_LE(std::fabs(hit[2] - std::floor(face / kCount) * kCount), kCount + 1e-9)
+      << "latched " << hit[2] << " mm, face at " << face << " mm";
+  EXPECT_EQ(rig.out().find("ALARM", from), std::string::npos) << rig.out().substr(from);
+  // Touching already: another G38.2 is ALARM:4 and does not move.
+  rig.run_for(0.1);
+  const double z = rig.status().mpos[2];
+  from = rig.out().size();
+  rig.send("G38.2 Z-5 F300\n");
+  ASSERT_TRUE(rig.run_until(answered(from), 5));
+  EXPECT_NE(rig.out().find("ALARM:4", from), std::string::npos) << rig.out().substr(from);
+  EXPECT_NEAR(rig.status().mpos[2], z, 2 * kCount);
+  // Away from the face (G38.4): the probe opens at it.
+  rig.send("$X\n");
+  from = rig.out().size();
+  rig.send("G38.4 Z0 F60\n");
+  ASSERT_TRUE(rig.run_until(answered(from), 5));
+  EXPECT_EQ(prb(from)[3], 1) << rig.out().substr(from);
+  EXPECT_NEAR(prb(from)[2], face, 2 * kCount);
+  // The parser continues from where the probe stopped: G91 moves are from there.
+  rig.send("G91 G0 Z1\n");
+  ASSERT_TRUE(rig.run_until_state("Idle", 5));
+  rig.run_for(0.2);
+  EXPECT_NEAR(rig.status().mpos[2], prb(from)[2] + 1, 2 * kCount);
+}
+
+// $LEV on the board: lines are levelled with the height map the server was
+// given (motionctl serve --level), split per cell; $LEV=0 stops it, a jog
+// ends on the bed's height at its target, and a cut that leaves the map is
+// an alarm naming it.
+TEST(GrblBoard, LevellingFollowsTheMapAndSwitchesOffAndOn) {
+  BoardRig rig;
+  const size_t from = rig.out().size();
+  rig.send("$LEV\n$LEV=1\n");
+  EXPECT_NE(rig.out().find("[LEV:OFF]\r\nok\r\nerror:5", from), std::string::npos) << rig.out().substr(from);
+  // A bed rising 0.2 mm over X 0..20 and 0.1 mm over Y 0..10.
+  machine::HeightMap map = machine::parse_height_map(
+      "[map]\nx0_mm = 0.0\ny0_mm = 0.0\ndx_mm = 10.0\ndy_mm = 10.0\n"
+      "heights_mm = [[0.0, 0.1, 0.2], [0.1, 0.2, 0.3]]\n",
+      "test map");
+  rig.backend().set_height_map(map, "bed.toml");
+  rig.send("$LEV\n");
+  EXPECT_NE(rig.out().find("[LEV:ON,3x2,X0..20,Y0..10,bed.toml]"), std::string::npos) << rig.out();
+  rig.stream({"G21 G90 G1 X20 Y0 Z-1 F1200", "G1 X15 Y5"}, 10);
+  ASSERT_TRUE(rig.run_until_state("Idle", 10));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 15, 5, -1 + 0.2, 3 * kCount);  // bilinear at (15, 5): 0.2
+  // A jog from the parser's position (15, 5, -1) ends levelled too.
+  rig.send("$J=G91 X-5 F600\n");
+  ASSERT_TRUE(rig.run_until_state("Idle", 5));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 10, 5, -1 + 0.15, 3 * kCount);
+  rig.send("$LEV=0\n");
+  rig.stream({"G1 X5 Y5 Z-1"}, 10);
+  ASSERT_TRUE(rig.run_until_state("Idle", 10));
+  rig.run_for(0.2);
+  expect_at(rig.status(), 5, 5, -1, 3 * kCount);
+  EXPECT_EQ(rig.out().find("error", from + 30), std::string::npos) << rig.out().substr(from);
+  // A cut off the map: an alarm naming the line, nothing moves.
+  rig.send("$LEV=1\n");
+  rig.stream({"G1 X30 Y5"}, 5);
+  rig.run_for(0.1);
+  EXPECT_NE(rig.out().find("outside the height map"), std::string::npos) << rig.out();
+  expect_at(rig.status(), 5, 5, -1, 3 * kCount);
 }
 
 TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {

@@ -92,7 +92,7 @@ TEST(Workpiece, TheEngravingRunsLevelledOverTheMapAndItsDepthErrorIsMeasuredOnCu
   mc.workpiece = plate();
   const WorkpieceConfig& w = *mc.workpiece;
   const HeightMap map = sample_height_map(w, 9, 7, 5);
-  const std::string prog = engraving_program(w, map, 0.1, 1500, 3, 2);
+  const std::string prog = engraving_program(map, surface_z_mm(w, map.x0, map.y0), 0.1, 1500, 3, 2);
   const Job j = plan_program(prog, "engrave.nc", mc, {0, 0, 0}, &map);
   EXPECT_GT(j.summary.moves, 20);
   // Samples: a cut at the right depth, one 0.01 mm too shallow, a rapid

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "host/base/errors.hpp"
@@ -14,6 +15,7 @@
 #include "host/grbl/board_backend.hpp"
 #include "host/grbl/dry_run_backend.hpp"
 #include "host/grbl/server.hpp"
+#include "host/machine/height_map.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -25,6 +27,7 @@ struct ServeOptions {
   std::string settings;
   int blocks = 16;
   std::string watchdog;  // empty: the board's
+  std::string level;     // height map file: levelling on from the start
 };
 
 // The machine behind the Grbl front end and what moves it along between
@@ -62,8 +65,12 @@ Machine make_backend(const ServeOptions& o) {
   if (wdog > 0) mc::grbl::watchdog_cycles(wdog, machine().clock_hz);  // refused before the board is touched
   Machine m;
   m.board = open_board();
+  // The map first: a bad file is refused before the board is readied.
+  std::optional<mc::machine::HeightMap> map;
+  if (!o.level.empty()) map = mc::machine::load_height_map(o.level);
   auto board = std::make_unique<mc::grbl::BoardBackend>(*m.board.link, machine(), o.blocks, note, wdog);
   mc::grbl::BoardBackend* b = board.get();
+  if (map) b->set_height_map(*map, o.level);
   m.tick = [b] { b->tick(); };
   m.backend = std::move(board);
   m.what = m.board.where;
@@ -73,6 +80,8 @@ Machine make_backend(const ServeOptions& o) {
 void run_serve(const ServeOptions& o) {
   if (o.pty.empty() && o.tcp < 0) throw InputError("--pty/--tcp", "neither given", "at least one of them");
   if (o.blocks < 1 || o.blocks > 255) throw InputError("--blocks", std::to_string(o.blocks), "1..255");
+  if (!o.level.empty() && (o.dry_run || (global_options().port.empty() && !global_options().sim)))
+    throw InputError("--level", o.level, "--port or --sim", "the dry-run machine does not level");
   const mc::machine::MachineConfig m = machine();
   mc::grbl::ServeConfig cfg;
   cfg.server.pty_link = o.pty;
@@ -111,6 +120,10 @@ void add_serve_command(CLI::App& app) {
                 "With --port/--sim: the board's watchdog period while serving, e.g. 500ms (default: the "
                 "board's, 100 ms): the drives go off this long after the last frame")
       ->type_name("TIME");
+  c->add_option("--level", o->level,
+                "With --port/--sim: level every line with this height map (motionctl level probe -o FILE); "
+                "$LEV=0 / $LEV=1 turn it off and on, $LEV reports it")
+      ->type_name("FILE");
   c->callback([o] { run_serve(*o); });
 }
 

@@ -131,6 +131,14 @@ class Backend {
   // Grbl status code: 0 when it started (motion() then reports homing), 5
   // "setting disabled" when the machine cannot home.
   virtual int home(unsigned axis_mask) = 0;
+
+  // Bed levelling ($LEV): the height map the machine was given, as `$LEV`
+  // reports it ("" when it has none), and whether the lines after now are
+  // levelled with it. set_levelling() returns a Grbl status code: 0, or 5
+  // "setting disabled" when there is no map.
+  virtual std::string height_map() const { return ""; }
+  virtual bool levelling() const { return false; }
+  virtual int set_levelling(bool on) { return on ? 5 : 0; }
 };
 
 }  // namespace mc::grbl

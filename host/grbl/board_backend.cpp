@@ -20,15 +20,31 @@ namespace bb = board::bits;
 using mc::host::JobStreamer;
 
 constexpr int kSettingDisabled = 5;
+constexpr int kNotIdle = 8;
 constexpr int kAlarmHardLimit = 1;
 constexpr int kAlarmSoftLimit = 2;
 constexpr int kAlarmAbortCycle = 3;
-constexpr int kAlarmProbeContact = 5;
 using mc::host::kInPosition;
 using mc::host::kSettleTimeout;
 
 bool limit_fault(uint32_t bits) {
   return bits & (0x7u << bb::F_LIMIT_LSB);
+}
+
+// $23..$27 on the machine file's homing. Grbl's are one value for every
+// axis, the file's one per axis: a setting the sender left at its default
+// (which the file gave, settings.cpp) keeps each axis's own, one it changed
+// applies to every axis. $23 flips an axis's search direction as in Grbl
+// (bit set: towards -), which finds nothing if the switch is not there.
+// $26 has nothing to act on: the board filters the switches itself.
+void apply_homing_settings(mc::machine::HomingPlan& plan, const Settings& s, const Settings& def) {
+  for (auto& pass : plan.passes)
+    for (mc::machine::HomeAxis& x : pass) {
+      if (s.homing_dir_mask != def.homing_dir_mask) x.direction = (s.homing_dir_mask >> x.axis & 1) ? -1 : 1;
+      if (s.homing_feed_mm_min != def.homing_feed_mm_min) x.locate_mm_min = s.homing_feed_mm_min;
+      if (s.homing_seek_mm_min != def.homing_seek_mm_min) x.seek_mm_min = s.homing_seek_mm_min;
+      if (s.homing_pulloff_mm != def.homing_pulloff_mm) x.pull_off_mm = s.homing_pulloff_mm;
+    }
 }
 
 }  // namespace
@@ -61,6 +77,7 @@ void BoardBackend::configure(const Settings& settings) {
   // The board's scales are its encoders': $100..$102 stay for senders. Rates
   // and accelerations apply within the machine's limits, which its motors
   // and the following-error limit were set for.
+  settings_ = settings;
   cfg_ = base_;
   for (size_t k = 0; k < 3; ++k) {
     mc::host::AxisLimits& a = cfg_.axes[k];
@@ -80,7 +97,7 @@ void BoardBackend::configure(const Settings& settings) {
 }
 
 bool BoardBackend::ready() const {
-  return int(lines_.size()) < blocks_;
+  return !homing_ && int(lines_.size()) + (probe_ ? 1 : 0) < blocks_;
 }
 
 void BoardBackend::arm() {
@@ -98,12 +115,28 @@ void BoardBackend::arm() {
 
 void BoardBackend::submit(Submission line) {
   const int key = next_key_++;
-  for (gcode::CanonCall& c : line.calls) {
-    c.line = key;
-    if (std::holds_alternative<gcode::StraightProbe>(c.op)) {
-      events_.push_back(AlarmEvent{kAlarmProbeContact,
-                                   "Probing (G38.x) is not run on the board yet: nothing moved", false});
-      return;
+  for (gcode::CanonCall& c : line.calls) c.line = key;
+  // A probe runs as its own cycle once everything before it is done; the
+  // line's other calls (feed, spindle) queue before it.
+  std::optional<gcode::StraightProbe> probing;
+  const auto probe_call = std::find_if(line.calls.begin(), line.calls.end(), [](const gcode::CanonCall& c) {
+    return std::holds_alternative<gcode::StraightProbe>(c.op);
+  });
+  if (probe_call != line.calls.end()) {
+    probing = std::get<gcode::StraightProbe>(probe_call->op);
+    line.calls.erase(probe_call);
+    for (size_t k = 0; k < 3; ++k) {
+      const mc::host::AxisLimits& a = cfg_.axes[k];
+      const double v = probing->end[k];
+      if (a.present && (v < a.min_mm - 1e-9 || v > a.max_mm + 1e-9)) {
+        events_.push_back(AlarmEvent{kAlarmSoftLimit,
+                                     std::string("Probe target ") + "XYZ"[k] + " " +
+                                         mc::host::format_number(v) + " mm is outside the travel " +
+                                         mc::host::format_number(a.min_mm) + " .. " +
+                                         mc::host::format_number(a.max_mm) + " mm",
+                                     false});
+        return;
+      }
     }
   }
   if (!armed_) {
@@ -117,6 +150,19 @@ void BoardBackend::submit(Submission line) {
   }
   std::vector<mc::host::Move> moves;
   try {
+    if (levelling() && line.jog) {
+      // A jog's target is the parser's, unlevelled: it ends on the bed's
+      // height there (the nearest edge's off the map, which does not
+      // refuse a jog), so MPos stays the program's position plus the map.
+      for (gcode::CanonCall& c : line.calls)
+        if (auto* f = std::get_if<gcode::StraightFeed>(&c.op))
+          f->end[2] += map_->height(f->end[0], f->end[1]);
+    } else if (levelling()) {
+      // The program's position is the levelled end less the map under it.
+      gcode::Vec3 start = s_->end();
+      start[2] -= map_->height(start[0], start[1]);
+      line.calls = mc::machine::level_calls(line.calls, start, *map_);
+    }
     moves = mc::host::to_moves(line.calls, s_->end(), cfg_);
   } catch (const mc::host::InputError& e) {
     // Beyond the machine's travel (with $20 off; the engine checks $20 itself).
@@ -126,10 +172,11 @@ void BoardBackend::submit(Submission line) {
   for (mc::host::Move& m : moves) m.no_override = line.jog;
   lines_.emplace_back(key, line.line_number);
   s_->append(moves);
+  if (probing) probe_.emplace().op = *probing;
 }
 
 bool BoardBackend::drained() const {
-  return !armed_ || (s_->drained() && !settling_);
+  return !homing_ && !probe_ && (!armed_ || (s_->drained() && !settling_));
 }
 
 void BoardBackend::feed_hold() {
@@ -146,7 +193,15 @@ void BoardBackend::jog_cancel() {
 }
 
 void BoardBackend::soft_reset() {
-  if (armed_) s_->abort();
+  const bool cycle = homing_ || (probe_ && probe_->cycle);
+  if (homing_) homing_->abort();
+  if (probe_ && probe_->cycle) probe_->cycle->abort();
+  homing_.reset();
+  probe_.reset();
+  if (cycle)
+    resync();  // the cycle moved the command without the streamer
+  else if (armed_)
+    s_->abort();
   lines_.clear();
   settling_ = false;  // reset: Idle (or an alarm) at once, as Grbl
   spindle_off();
@@ -180,13 +235,19 @@ void BoardBackend::fault(uint32_t bits) {
 }
 
 void BoardBackend::tick() {
-  if (armed_) {
+  if (homing_) {
+    poll_homing();
+  } else if (probe_ && probe_->cycle) {
+    poll_probe();
+  } else if (armed_) {
     try {
       s_->poll();
     } catch (const mc::host::BoardError&) {
       if (!s_->fault()) throw;  // a refused request: a bug, not the machine
       fault(s_->fault());
     }
+    // The moves before a probe are done and the axes in position: probe.
+    if (armed_ && probe_ && s_->drained() && !settling_) poll_probe();
   }
   read_positions();
   // Lines whose moves have all run.
@@ -207,6 +268,11 @@ void BoardBackend::read_positions() {
     pos_[k] = double(c - cfg_.axes[k].origin) / cfg_.axes[k].counts_per_mm;
     in = in && std::llabs(int64_t(c) - cmd[k]) <= kInPosition;
   }
+  // The switches as the board filters them: the home switches are the
+  // limit inputs (Pn:XYZ), the probe Pn:P.
+  const uint32_t io = l_.read(br::IO_STAT);
+  pins_.probe = io >> bb::IOS_PROBE & 1;
+  for (int a = 0; a < 3; ++a) pins_.limit[a] = io >> (bb::IOS_HOME_LSB + a) & 1;
   const JobStreamer::State st = s_->state();
   if (!armed_) {
     settling_ = false;
@@ -227,6 +293,7 @@ void BoardBackend::action(const mc::host::Move& m) {
 Status BoardBackend::status() const {
   Status s;
   const auto c = s_->current();
+  s.pins = pins_;
   switch (armed_ ? s_->state() : JobStreamer::State::idle) {
     case JobStreamer::State::idle:
       s.motion = settling_ ? Motion::run : Motion::idle;
@@ -241,6 +308,8 @@ Status BoardBackend::status() const {
       s.motion = settling_ ? Motion::holding : Motion::held;
       break;
   }
+  if (homing_) s.motion = Motion::homing;
+  if (probe_ && probe_->cycle) s.motion = Motion::run;
   s.position = pos_;
   s.feed_mm_min = c ? c->feed_mm_s * 60 : 0;
   s.spindle = spindle_.dir;
@@ -261,8 +330,107 @@ std::optional<Event> BoardBackend::poll_event() {
   return e;
 }
 
-int BoardBackend::home(unsigned) {
-  return kSettingDisabled;  // homing runs once the board has its cycle (issue 19)
+int BoardBackend::home(unsigned axis_mask) {
+  if (homing_ || probe_ || !lines_.empty() || (armed_ && !s_->drained())) return kNotIdle;
+  unsigned mask = 0;
+  for (size_t a = 0; a < machine_.axes.size() && a < 3; ++a)
+    if ((axis_mask >> a & 1) && machine_.axes[a].home) mask |= 1u << a;
+  if (!mask) return kSettingDisabled;  // no switch to home on
+  mc::machine::HomingPlan plan = mc::machine::homing_plan(machine_, mask);
+  if (settings_) apply_homing_settings(plan, *settings_, default_settings(machine_));
+  try {
+    if (!armed_) {
+      // After an alarm: what can be cleared is; a limit fault on a homed
+      // axis the cycle clears itself, once that limit is off.
+      try {
+        mc::host::clear_faults(l_);
+      } catch (const mc::host::BoardError&) {
+      }
+    }
+    homing_.emplace(l_, machine_, std::move(plan), note_);
+    armed_ = true;
+  } catch (const mc::machine::CycleError& e) {
+    cycle_failed(e.grbl_alarm(), e.what());
+  } catch (const mc::host::BoardError& e) {
+    cycle_failed(kAlarmAbortCycle, e.what());
+  }
+  return 0;
+}
+
+std::string BoardBackend::height_map() const {
+  if (!map_) return "";
+  using mc::host::format_number;
+  return std::to_string(map_->nx) + "x" + std::to_string(map_->ny) + ",X" + format_number(map_->x0) + ".." +
+         format_number(map_->x1()) + ",Y" + format_number(map_->y0) + ".." + format_number(map_->y1()) + "," +
+         map_name_;
+}
+
+int BoardBackend::set_levelling(bool on) {
+  if (on && !map_) return kSettingDisabled;
+  level_on_ = on;
+  return 0;
+}
+
+void BoardBackend::set_height_map(const mc::machine::HeightMap& map, const std::string& name) {
+  map_ = map;
+  map_name_ = name;
+  level_on_ = true;
+}
+
+void BoardBackend::poll_homing() {
+  try {
+    if (!homing_->poll()) return;
+  } catch (const mc::machine::CycleError& e) {
+    return cycle_failed(e.grbl_alarm(), e.what());
+  } catch (const mc::host::BoardError& e) {
+    return cycle_failed(kAlarmAbortCycle, e.what());
+  }
+  homing_.reset();
+  resync();  // machine zero moved: MPos and every plan from the new origin
+}
+
+void BoardBackend::poll_probe() {
+  Probing& p = *probe_;
+  try {
+    if (!p.cycle) {
+      const mc::host::Vec3 from = s_->command_end(), to = mc::host::to_counts(p.op.end, cfg_);
+      const double feed = mc::machine::path_feed_counts_s(from, to, p.op.feed_mm_min, cfg_);
+      const bool toward =
+          p.op.mode == gcode::ProbeMode::toward || p.op.mode == gcode::ProbeMode::toward_error;
+      unsigned axes = 0;
+      for (size_t k = 0; k < 3; ++k)
+        if (cfg_.axes[k].present) axes |= 1u << k;
+      p.cycle.emplace(l_, from, to, feed, toward, axes);
+    }
+    if (!p.cycle->poll()) return;
+  } catch (const mc::machine::CycleError& e) {
+    return cycle_failed(e.grbl_alarm(), e.what());
+  } catch (const mc::host::BoardError& e) {
+    return cycle_failed(kAlarmAbortCycle, e.what());
+  }
+  events_.push_back(ProbeEvent{mc::host::to_mm(p.cycle->position(), cfg_), p.cycle->contact()});
+  probe_.reset();
+  resync();
+}
+
+void BoardBackend::cycle_failed(int alarm, const std::string& what) {
+  homing_.reset();
+  probe_.reset();
+  if (const uint32_t bits = l_.read(br::FAULT)) return fault(bits);
+  events_.push_back(AlarmEvent{alarm, what, false});
+  resync();
+}
+
+void BoardBackend::resync() {
+  base_ = mc::machine::planner_config(machine_, mc::host::read_origin(l_).counts);
+  cfg_ = base_;
+  if (settings_)
+    configure(*settings_);
+  else
+    s_->set_config(cfg_);
+  s_->restart(mc::host::abort_interpolator(l_));
+  lines_.clear();
+  read_positions();
 }
 
 }  // namespace mc::grbl

@@ -11,8 +11,10 @@
 // naming the fault; the drives are armed again with the next line once the
 // fault's cause is gone. Spindle and coolant drive the board's IO_CTRL in
 // order with the motion. Positions are machine coordinates from the board's
-// origin (ORIGIN, set by `motionctl home`); probing and $H are not run here
-// yet.
+// origin (ORIGIN). `$H` runs the homing cycle (host/machine/cycles.hpp)
+// from tick(), with the machine file's [home] tables as $23..$27 adjust
+// them, and moves the origin with it; G38.x runs the probing cycle once the
+// moves before it are done, and reports where the probe latched.
 #pragma once
 
 #include <chrono>
@@ -25,6 +27,8 @@
 #include "host/grbl/backend.hpp"
 #include "host/grbl/settings.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/cycles.hpp"
+#include "host/machine/height_map.hpp"
 #include "host/machine/machine_config.hpp"
 #include "host/machine/spindle.hpp"
 #include "host/motion/job_stream.hpp"
@@ -61,6 +65,13 @@ class BoardBackend : public Backend {
   int planner_blocks() const override { return blocks_; }
   std::optional<Event> poll_event() override;
   int home(unsigned axis_mask) override;
+  std::string height_map() const override;
+  bool levelling() const override { return map_ && level_on_; }
+  int set_levelling(bool on) override;
+  // The bed's height map (motionctl serve --level FILE): every line that is
+  // not a jog is levelled with it (host/machine/height_map.hpp) while
+  // levelling is on, which this turns on. `name`: what $LEV calls it.
+  void set_height_map(const mc::machine::HeightMap& map, const std::string& name);
 
   // The planner's limits now ($110.. and $120.. within the machine's).
   const mc::host::PlannerConfig& planner() const { return cfg_; }
@@ -70,6 +81,13 @@ class BoardBackend : public Backend {
   void read_positions();
   void fault(uint32_t bits);
   void action(const mc::host::Move& m);
+  // The cycles, one round each from tick().
+  void poll_homing();
+  void poll_probe();
+  // After a cycle moved the command outside the streamer: plan from where
+  // it stands, in the board's (possibly new) machine frame.
+  void resync();
+  void cycle_failed(int alarm, const std::string& what);
 
   mc::host::BoardLink& l_;
   mc::machine::MachineConfig machine_;
@@ -83,6 +101,7 @@ class BoardBackend : public Backend {
   std::deque<std::pair<int, int>> lines_;
   int next_key_ = 1;
   gcode::Vec3 pos_{};  // machine mm, from the encoders
+  Pins pins_;
   // Motion has stopped on the board but an axis is not yet within
   // kInPosition counts of its command: a stop (Idle, Hold:0) is reported
   // once the servo has settled there, or kSettleTimeout after it stopped.
@@ -95,6 +114,17 @@ class BoardBackend : public Backend {
   // again when the next line rearms it).
   void spindle_off();
   std::deque<Event> events_;
+  std::optional<Settings> settings_;  // the sender's, once configure() had them
+  std::optional<mc::machine::HomingCycle> homing_;
+  // A G38.x line: waits for the moves before it, then runs as `cycle`.
+  struct Probing {
+    gcode::StraightProbe op;
+    std::optional<mc::machine::ProbeCycle> cycle;
+  };
+  std::optional<Probing> probe_;
+  std::optional<mc::machine::HeightMap> map_;
+  std::string map_name_;
+  bool level_on_ = false;
 };
 
 }  // namespace mc::grbl

@@ -572,6 +572,8 @@ void Engine::advance_pending() {
   }
   reply(kOk, done.prefix);
   if (done.homing) {
+    // Machine zero moved: the parser continues from the new MPos.
+    interp_.set_machine_position(backend_.status().position);
     alarm_ = false;
     for (const std::string& l : stored_.startup)
       if (!l.empty()) startup_.push_back(l);
@@ -629,6 +631,20 @@ int Engine::jog(const std::string& line) {
   return -1;
 }
 
+// $LEV: the bed's height map (not Grbl's: motionctl serve --level FILE
+// gives it), reported as [LEV:ON|OFF,NxM,Xa..b,Yc..d,FILE]; $LEV=1 and
+// $LEV=0 turn levelling on and off for the lines that follow.
+int Engine::levelling(const std::string& l) {
+  if (l == "$LEV") {
+    const std::string map = backend_.height_map();
+    emit("[LEV:" + std::string(backend_.levelling() ? "ON" : "OFF") + (map.empty() ? "" : "," + map) + "]");
+    return kOk;
+  }
+  if (l != "$LEV=0" && l != "$LEV=1") return kInvalidStatement;
+  if (alarm_) return kNotIdle;
+  return backend_.set_levelling(l.back() == '1');
+}
+
 int Engine::system_command(const std::string& l) {
   Settings& set = stored_.settings;
   const Motion m = backend_.status().motion;
@@ -674,6 +690,7 @@ int Engine::system_command(const std::string& l) {
   }
   // The rest needs Idle or Alarm.
   if (!(idle || (alarm_ && !sleep_))) return kNotIdle;
+  if (l.rfind("$LEV", 0) == 0) return levelling(l);
   switch (c) {
     case '#': {
       if (l.size() != 2) return kInvalidStatement;

@@ -99,6 +99,7 @@ class Engine {
   void execute(const std::string& line, const std::string& prefix);
   void gcode_line(const std::string& line, const std::string& prefix);
   int system_command(const std::string& line);
+  int levelling(const std::string& line);
   int jog(const std::string& line);
   void advance_pending();
   void reply(int code, const std::string& prefix = "");

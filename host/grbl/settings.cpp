@@ -158,6 +158,20 @@ Settings default_settings(const mc::machine::MachineConfig& machine) {
     s.max_travel_mm[a] = (ax.travel_max_m - ax.travel_min_m) * 1000.0;
     s.travel_top_mm[a] = ax.travel_max_m * 1000.0;
   }
+  // $23..$27 from the axes' [home] tables: one value for all, as Grbl, so
+  // the slowest speeds and the longest pull-off; the board backend keeps
+  // each axis's own while these stay at these defaults.
+  bool first = true;
+  for (size_t a = 0; a < machine.axes.size() && a < 3; ++a) {
+    const auto& h = machine.axes[a].home;
+    if (!h) continue;
+    if (h->direction < 0) s.homing_dir_mask |= 1 << a;
+    const double seek = h->seek_m_s * 60e3, locate = h->locate_m_s * 60e3, pull = h->pull_off_m * 1e3;
+    s.homing_seek_mm_min = first ? seek : std::min(s.homing_seek_mm_min, seek);
+    s.homing_feed_mm_min = first ? locate : std::min(s.homing_feed_mm_min, locate);
+    s.homing_pulloff_mm = first ? pull : std::max(s.homing_pulloff_mm, pull);
+    first = false;
+  }
   return s;
 }
 

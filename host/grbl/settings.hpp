@@ -53,7 +53,9 @@ struct Settings {
 // Defaults for `machine`: counts per mm from encoder, gear and lead, max rate
 // from max_speed_m_s, acceleration from max_accel_m_s2, travel from
 // travel_min_m..travel_max_m, junction deviation and arc tolerance from
-// [planner]; an axis the machine lacks takes the last axis' values.
+// [planner], homing ($23 direction, $24 locate and $25 seek feeds, $27
+// pull-off) from the [home] tables (the slowest feeds, the longest
+// pull-off); an axis the machine lacks takes the last axis' values.
 Settings default_settings(const mc::machine::MachineConfig& machine);
 
 // The setting numbers, in the order `$$` prints them.

@@ -47,6 +47,25 @@ void wait_on_link(BoardLink& l) {
   l.poll(std::chrono::milliseconds(1));
 }
 
+double path_feed_counts_s(const Vec3& from, const Vec3& to, double feed_mm_min,
+                          const mc::host::PlannerConfig& cfg) {
+  double mm2 = 0, counts2 = 0;
+  for (size_t k = 0; k < 3; ++k) {
+    const double d = double(to[k] - from[k]);
+    if (cfg.axes[k].present) mm2 += std::pow(d / cfg.axes[k].counts_per_mm, 2);
+    counts2 += d * d;
+  }
+  const double len_mm = std::sqrt(mm2);
+  if (!(len_mm > 0)) return 0;
+  double v = feed_mm_min / 60;
+  for (size_t k = 0; k < 3; ++k) {
+    const mc::host::AxisLimits& a = cfg.axes[k];
+    const double d_mm = a.present ? std::fabs(double(to[k] - from[k])) / a.counts_per_mm : 0;
+    if (d_mm > 0) v = std::min(v, a.max_rate_mm_s * len_mm / d_mm);
+  }
+  return std::sqrt(counts2) / len_mm * v;
+}
+
 bool probe_closed(BoardLink& l) {
   return l.read(br::IO_STAT) >> bb::IOS_PROBE & 1;
 }
@@ -258,6 +277,13 @@ void HomingCycle::restore() {
   restored_ = true;
   l_.write(br::LATCH, latch0_);
   l_.write(br::SAFETY, safety0_);
+}
+
+void HomingCycle::abort() {
+  if (phase_ == Phase::done) return;
+  phase_ = Phase::done;
+  mc::host::abort_interpolator(l_);
+  restore();
 }
 
 bool HomingCycle::poll() {

@@ -24,6 +24,7 @@
 #include "host/link/board_state.hpp"
 #include "host/machine/machine_config.hpp"
 #include "host/motion/interp_plan.hpp"
+#include "host/motion/planner.hpp"
 
 namespace mc::machine {
 
@@ -115,6 +116,9 @@ class HomingCycle {
   // One round; true when every pass is done. CycleError, BoardError: the
   // cycle failed (SAFETY and LATCH are restored first).
   bool poll();
+  // Stops the motion at once (a sender's reset): SAFETY and LATCH restored,
+  // the axes not yet located stay unhomed.
+  void abort();
   // After completion: the origins set (board counts, per axis).
   const mc::host::Vec3& origin() const { return origin_; }
 
@@ -173,6 +177,12 @@ class ProbeCycle {
   LatchedMove move_;
   bool restored_ = false;
 };
+
+// The feed along a straight move from `from` to `to` (board counts) that a
+// cycle's LatchedMove takes, counts per second: feed_mm_min along the path
+// in mm, lowered until no axis exceeds its max rate in `cfg`.
+double path_feed_counts_s(const mc::host::Vec3& from, const mc::host::Vec3& to, double feed_mm_min,
+                          const mc::host::PlannerConfig& cfg);
 
 // The probe input as the board filters it (IO_STAT), active high.
 bool probe_closed(mc::host::BoardLink& l);

@@ -22,6 +22,9 @@ struct LevelCompareOptions {
   double depth_mm = 0.1;      // engraving depth
   double feed_mm_min = 1500;  // cutting feed
   int rows = 3, columns = 2;  // cuts along X and along Y
+  // Probe the map on the board (probe_grid, from 3 mm above the face)
+  // instead of sampling the face as a perfect probe would.
+  bool probe = false;
 };
 
 struct LevelCompareRun {
@@ -32,7 +35,9 @@ struct LevelCompareRun {
 };
 
 struct LevelComparison {
-  HeightMap map;        // what a perfect probe takes of the face
+  HeightMap map;  // what a perfect probe takes of the face, or what the board's probe took
+  double work_zero_z_mm =
+      0;                // machine Z the engraving's G54 Z0 is at: the face (or contact) at the first point
   std::string program;  // the engraving
   std::vector<LevelCompareRun> runs;
 };

@@ -76,14 +76,14 @@ HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double ins
   return m;
 }
 
-std::string engraving_program(const WorkpieceConfig& w, const HeightMap& map, double depth_mm,
+std::string engraving_program(const HeightMap& map, double work_zero_z_mm, double depth_mm,
                               double feed_mm_min, int rows, int columns) {
   std::ostringstream g;
   g << "(An engraving " << mm(depth_mm) << " mm deep over the workpiece: " << rows << " cuts along X, "
     << columns << " along Y.)\n"
     << "(Work zero: the face at the map's first point, X" << mm(map.x0) << " Y" << mm(map.y0) << ".)\n"
     << "G21 G90 G17 G94\n"
-    << "G10 L2 P1 X0 Y0 Z" << mm(surface_z_mm(w, map.x0, map.y0)) << "\nG54\nG0 Z" << mm(kSafeMm) << "\n";
+    << "G10 L2 P1 X0 Y0 Z" << mm(work_zero_z_mm) << "\nG54\nG0 Z" << mm(kSafeMm) << "\n";
   const auto cut = [&](double xa, double ya, double xb, double yb) {
     // The dwell lets the Z servo settle from the plunge, which it overshoots
     // by a few counts: this compares levelling, not plunges.

@@ -30,9 +30,10 @@ HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double ins
 // An engraving `depth_mm` deep over the map's area: `rows` cuts along X and
 // `columns` along Y, each from edge to edge of the map, at `feed_mm_min`,
 // plunged at 300 mm/min with a 0.25 s dwell at depth before each cut, and
-// rapids 3 mm above the work zero between them. Its work zero (G54) is the
-// face at the map's first point, where an operator would have zeroed Z.
-std::string engraving_program(const WorkpieceConfig& w, const HeightMap& map, double depth_mm,
+// rapids 3 mm above the work zero between them. Its work zero (G54) is
+// machine Z `work_zero_z_mm` at the map's first point, where an operator
+// would have zeroed Z on the face.
+std::string engraving_program(const HeightMap& map, double work_zero_z_mm, double depth_mm,
                               double feed_mm_min, int rows, int columns);
 
 // How far the measured tool tip was from `depth_mm` below the face, over
