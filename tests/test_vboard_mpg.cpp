@@ -191,8 +191,8 @@ TEST(VBoardMpg, TwinAndRtlAgreeEdgeForEdge) {
   constexpr size_t kRec = 1 + 3 * 4, kLast = 2 * kRec;
   ASSERT_EQ(twin.at.size(), 3 * kRec);
   EXPECT_EQ(twin.at[kLast], (3 - 4 + 1 - 2) * sim::kHandwheelCountsPerDetent);
-  EXPECT_EQ(twin.at[kLast + 1 + 4 * kX + 2], 30 - 100);
-  EXPECT_EQ(twin.at[kLast + 1 + 4 * kZ + 2], -4);
+  EXPECT_EQ(twin.at[kLast + 1 + 4 * size_t(kX) + 2], 30 - 100);
+  EXPECT_EQ(twin.at[kLast + 1 + 4 * size_t(kZ) + 2], -4);
 }
 
 }  // namespace
