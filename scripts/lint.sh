@@ -19,7 +19,7 @@ files=$(ls host/*/*.cpp sim/*/*.cpp tests/test_layers.cpp tests/test_sim_plant.c
   tests/test_interp_twin.cpp tests/test_interp_rtl.cpp tests/test_motion_core_rtl.cpp \
   tests/test_quad_decoder_twin.cpp tests/test_quad_decoder_rtl.cpp tests/test_quad_rate_rtl.cpp \
   tests/test_board_link.cpp tests/test_cli_board.cpp tests/test_cli_step.cpp tests/test_board_capture.cpp tests/test_board_rx.cpp \
-  tests/test_vboard_io.cpp tests/test_board_setup.cpp tests/test_board_builds.cpp tests/test_cycles.cpp)
+  tests/test_vboard_io.cpp tests/test_vboard_mpg.cpp tests/test_cli_mpg.cpp tests/test_board_setup.cpp tests/test_board_builds.cpp tests/test_cycles.cpp)
 echo "clang-tidy: $(echo "$files" | wc -w) files"
 # One file per process, two at a time; any finding fails (WarningsAsErrors).
 if ! echo "$files" | xargs -n 1 -P "$(nproc)" clang-tidy -p "$build" --quiet 2> >(grep -v "warnings generated" >&2); then

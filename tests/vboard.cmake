@@ -51,6 +51,18 @@ mc_gtest(test_vboard_io system test_vboard_io.cpp)
 target_link_libraries(test_vboard_io PRIVATE mc_motion mc_vboard)
 target_compile_definitions(test_vboard_io PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
 
+# The handwheel jog on the virtual board: detents move the step, twin
+# against RTL edge for edge, MPG off drops what is pending.
+mc_gtest(test_vboard_mpg system test_vboard_mpg.cpp)
+target_link_libraries(test_vboard_mpg PRIVATE mc_motion mc_vboard)
+target_compile_definitions(test_vboard_mpg PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+
+# motionctl mpg and sim wheel against a sim server.
+mc_gtest(test_cli_mpg system test_cli_mpg.cpp)
+target_link_libraries(test_cli_mpg PRIVATE nlohmann_json::nlohmann_json)
+target_compile_definitions(test_cli_mpg PRIVATE MOTIONCTL_PATH="$<TARGET_FILE:motionctl>")
+add_dependencies(test_cli_mpg motionctl)
+
 # Machine cycles on the virtual board: homing repeatable against the plant,
 # probing a known surface (issue 19).
 mc_gtest(test_cycles system TIMEOUT 900 test_cycles.cpp)

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -200,6 +201,12 @@ SimServer ensure_sim_server(const std::string& config) {
     return *s;
   }
   return start_sim_server(want);
+}
+
+std::string sim_wheel_socket(const std::string& pty) {
+  std::string name = pty;  // "/dev/pts/5" -> "wheel-dev-pts-5.sock"
+  std::replace(name.begin(), name.end(), '/', '-');
+  return sim_state_dir() + "/wheel" + name + ".sock";
 }
 
 Board open_board() {

@@ -66,6 +66,10 @@ bool register_sim_server(const SimServer& s);
 void unregister_sim_server(const SimServer& s);
 // The running server, or a freshly started one for `config`.
 SimServer ensure_sim_server(const std::string& config);
+// The handwheel socket of the server on pseudo-terminal `pty`
+// (sim/vboard/wheel_socket.hpp), beside the state file: named after the
+// terminal, so that a server started with --no-register has one too.
+std::string sim_wheel_socket(const std::string& pty);
 
 // Counts per metre of each board axis the machine config describes (0: none).
 std::array<double, 3> axis_scales();

@@ -1,6 +1,6 @@
-// motionctl sim serve | stop: the virtual board (sim/virtual_board.hpp) on a
-// pseudo-terminal, in the foreground, and stopping the registered one
-// (sim soak: cmd_soak.cpp).
+// motionctl sim serve | stop | wheel: the virtual board
+// (sim/virtual_board.hpp) on a pseudo-terminal, in the foreground; stopping
+// the registered one; turning its handwheel (sim soak: cmd_soak.cpp).
 #include <signal.h>
 #include <unistd.h>
 
@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "host/cli/board_cli.hpp"
 #include "host/cli/commands.hpp"
 #include "sim/vboard/virtual_board.hpp"
+#include "sim/vboard/wheel_socket.hpp"
 
 namespace mc::host::cli {
 namespace {
@@ -72,6 +74,7 @@ void serve(const ServeOptions& o) {
   const mc::machine::MachineConfig m = machine();
   mc::sim::VirtualBoard board(m, 0, engine);
   mc::sim::Pty pty;
+  mc::sim::WheelSocket wheel(sim_wheel_socket(pty.path()));
   SimServer me{pty.path(), long(::getpid()), m.source == "built-in default" ? "" : global_options().config};
   if (!me.config.empty() && me.config[0] != '/') {
     char cwd[4096];
@@ -93,6 +96,7 @@ void serve(const ServeOptions& o) {
     throw InputError("--host-wait", o.host_wait, "a time from 0 to 1 s");
   so.idle_exit_s = idle_min * 60;
   so.status_every_s = every;
+  so.wheel = &wheel;
   so.status = [](const mc::sim::ServeStatus& s) {
     char line[256];
     if (s.dormant) {
@@ -161,6 +165,38 @@ void stop() {
             << " s of SIGTERM\n";
 }
 
+struct WheelOptions {
+  std::string detents;
+  std::string seconds = "1";
+};
+
+// The server to turn: the one on --port PTY, else the registered one (--sim
+// too: a wheel is no reason to start a board).
+std::string wheel_pty() {
+  const GlobalOptions& g = global_options();
+  if (!g.port.empty()) return g.port;
+  if (auto s = find_sim_server()) return s->pty;
+  throw InputError("virtual board", "none running (" + sim_state_dir() + ")",
+                   "one started with 'motionctl sim serve' (or by a --sim command), or --port PTY of one");
+}
+
+void wheel(const WheelOptions& o) {
+  const double d = parse_number(o.detents, "--detents");
+  if (d != std::round(d) || std::fabs(d) > mc::sim::kMaxHandwheelDetents)
+    throw InputError(
+        "--detents", quote(o.detents),
+        "a whole number of detents up to " + std::to_string(mc::sim::kMaxHandwheelDetents) + " either way");
+  const double s = parse_duration(o.seconds, "--seconds", Zero::allow);
+  const std::string pty = wheel_pty();
+  const std::string path = sim_wheel_socket(pty);
+  if (::access(path.c_str(), F_OK) != 0)
+    throw InputError("virtual board", quote(pty), "a running 'motionctl sim serve' on it (no " + path + ")");
+  mc::sim::request_wheel_turn(path, int(d), s);
+  std::cout << "turned the handwheel " << int(d) << " detents ("
+            << int(d) * mc::sim::kHandwheelCountsPerDetent << " quadrature counts) over " << format_number(s)
+            << " s of board time\n";
+}
+
 }  // namespace
 
 void add_sim_command(CLI::App& app) {
@@ -201,6 +237,18 @@ void add_sim_command(CLI::App& app) {
       "Sends SIGTERM and waits up to 10 s for the server to exit; if it has not, SIGKILL. Prints which,\n"
       "and exits 1 when the process is still running after both.");
   st->callback([] { stop(); });
+  auto wo = std::make_shared<WheelOptions>();
+  CLI::App* wh = sim->add_subcommand("wheel", "Turn the handwheel of the running virtual board");
+  wh->footer(
+      "A 100-PPR handwheel on the board's HW_A/HW_B pins: 4 quadrature counts a detent, the edges spread\n"
+      "evenly over --seconds of board time from now. Returns once the turn is done. The board running\n"
+      "(motionctl sim serve, or one a --sim command started) is the registered one, or the one on\n"
+      "--port PTY given before the command. What a turn moves: motionctl mpg.");
+  wh->add_option("--detents", wo->detents, "Detents to turn, signed (negative: backwards)")
+      ->required()
+      ->type_name("N");
+  wh->add_option("--seconds", wo->seconds, "Board time the turn takes (default 1 s)")->type_name("TIME");
+  wh->callback([wo] { wheel(*wo); });
   add_soak_command(*sim);
 }
 

@@ -16,6 +16,7 @@
 #include "host/cli/commands.hpp"
 #include "host/control/board_gains.hpp"
 #include "host/link/board_state.hpp"
+#include "host/machine/mpg.hpp"
 #include "host/motion/board_run.hpp"
 
 namespace mc::host::cli {
@@ -34,6 +35,8 @@ void status(bool json) {
   // Counts are the board's (from power-up); mm are machine coordinates,
   // from the origin a homing cycle set (none: from power-up as well).
   const MachineOrigin org = read_origin(*b.link);
+  const mc::machine::MpgSetting mpg = mc::machine::read_mpg(*b.link);
+  const int32_t mpg_pending = mc::machine::mpg_pending(*b.link);
   if (json) {
     nlohmann::ordered_json j;
     j["port"] = b.port->name();
@@ -75,6 +78,7 @@ void status(bool json) {
       }
       j["axes"].push_back(ja);
     }
+    j["handwheel"] = {{"setting", mc::machine::mpg_text(mpg)}, {"pending_counts", mpg_pending}};
     j["link"] = {{"board_crc_errors", s.link_crc & 0xFFFF},  {"board_framing_errors", s.link_crc >> 16},
                  {"board_refused", s.link_cmd & 0xFFFF},     {"board_duplicates", s.link_cmd >> 16},
                  {"board_junk_bytes", s.link_junk & 0xFFFF}, {"host_requests", c.requests},
@@ -102,6 +106,7 @@ void status(bool json) {
                   x.drv_en ? "on" : "off", mm, org.is_homed(a) ? "yes" : "no");
     std::cout << line;
   }
+  std::cout << "handwheel " << mc::machine::mpg_text(mpg) << ", " << mpg_pending << " counts pending\n";
   std::snprintf(line, sizeof line,
                 "link: board counted %u CRC errors, %u framing errors, %u refused, %u duplicates, %u junk "
                 "bytes; this run %llu requests, %llu retransmits, round trip %.1f ms\n",

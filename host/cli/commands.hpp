@@ -21,6 +21,7 @@ void add_sim_command(CLI::App& app);
 void add_soak_command(CLI::App& sim);
 void add_status_command(CLI::App& app);
 void add_board_commands(CLI::App& app);
+void add_mpg_command(CLI::App& app);
 void add_gains_commands(CLI::App& app);
 void add_step_commands(CLI::App& app);
 void add_tune_command(CLI::App& app);

@@ -68,6 +68,7 @@ int run(int argc, char** argv) {
   mc::host::cli::add_sim_command(app);
   mc::host::cli::add_status_command(app);
   mc::host::cli::add_board_commands(app);
+  mc::host::cli::add_mpg_command(app);
   mc::host::cli::add_cycle_commands(app);
   mc::host::cli::add_gains_commands(app);
   mc::host::cli::add_step_commands(app);

@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <deque>
+#include <limits>
 #include <stdexcept>
 
 #include "host/base/errors.hpp"
@@ -21,6 +23,7 @@
 #include "sim/vboard/board_model.hpp"
 #include "sim/vboard/contact.hpp"
 #include "sim/vboard/uart_model.hpp"
+#include "sim/vboard/wheel_socket.hpp"
 
 namespace mc::sim {
 
@@ -171,6 +174,27 @@ struct VirtualBoard::Impl {
     high_since = high;
   }
 
+  // The handwheel: the clock at which the next edge is due (kNever: the
+  // wheel rests), and showing every edge due by clock `now` on HW_A/HW_B.
+  // Edge i of a turn of n comes at start + i * span / n.
+  static constexpr uint64_t kNever = std::numeric_limits<uint64_t>::max();
+  uint64_t next_wheel_edge() const {
+    if (turns.empty()) return kNever;
+    const Turn& t = turns.front();
+    const uint64_t n = uint64_t(std::llabs(t.edges));
+    return t.start + (t.done + 1) * t.span / n;
+  }
+  void show_wheel(uint64_t now) {
+    while (next_wheel_edge() <= now) {
+      Turn& t = turns.front();
+      wheel += t.edges < 0 ? -1 : 1;
+      if (++t.done == uint64_t(std::llabs(t.edges))) turns.pop_front();
+    }
+    const QuadPins q = quadrature_pins(wheel, 1 << 30);  // no index on a handwheel
+    pins.hw_a = q.a;
+    pins.hw_b = q.b;
+  }
+
   // Encoder edges of this step: the count the plant reached, at most one
   // edge every other clock (the decoder's rate), the rest carried over.
   void plan_edges() {
@@ -212,6 +236,8 @@ struct VirtualBoard::Impl {
         const uint32_t next = (c | 1) + 1;  // the next even clock
         if (next < edges_until) hold = std::min(hold, next - c);
       }
+      show_wheel(cycles + c);
+      if (const uint64_t e = next_wheel_edge(); e - (cycles + c) < hold) hold = uint32_t(e - (cycles + c));
       pins.rx = tx.pin();
       const uint32_t steady = tx.steady();
       if (steady < hold) hold = steady + 1;
@@ -241,9 +267,13 @@ struct VirtualBoard::Impl {
   // after the step in which an encoder count changes or a switch is
   // crossed, and never starts while one bounces: the switch pins change
   // only in plant_step(). The spindle and coolant pins hold (SP_PWM aside,
-  // whose high clocks the board model counts).
+  // whose high clocks the board model counts). A handwheel edge ends the
+  // stretch at the step boundary before it: plant_step() shows it at its
+  // clock.
   bool jump(uint64_t steps) {
     if (!tx.idle() || rx.busy() || rx.has_byte() || !contacts_quiet()) return false;
+    if (const uint64_t e = next_wheel_edge(); e != kNever) steps = std::min(steps, (e - cycles) / k);
+    if (steps == 0) return false;
     for (int a = 0; a < naxes; ++a)
       if (slot[a].encoder_count() != slot[a].shown) return false;
     pins.rx = tx.pin();
@@ -288,6 +318,17 @@ struct VirtualBoard::Impl {
   VirtualBoard::SpindleState spindle;
   std::vector<VirtualBoard::SpindleEvent> spindle_log;
   uint64_t spindle_since = 0, high_since = 0;
+  // The handwheel: the turns still to come (the one in hand first; edges
+  // signed, done counts the edges shown), the count the pins show, and the
+  // clock the last turn ends.
+  struct Turn {
+    uint64_t start = 0, span = 0;
+    int64_t edges = 0;
+    uint64_t done = 0;
+  };
+  std::deque<Turn> turns;
+  int64_t wheel = 0;
+  uint64_t wheel_free = 0;
 };
 
 VirtualBoard::VirtualBoard(const MachineConfig& m, uint32_t seed, BoardEngine e)
@@ -332,7 +373,7 @@ bool VirtualBoard::dormant() const {
     const auto& s = impl_->slot[a];
     if (impl_->board->drv_en() || (s.present() && !s.still())) return false;
   }
-  return true;
+  return impl_->turns.empty();  // the board counts every handwheel edge, drives on or off
 }
 double VirtualBoard::position_m(int axis) const {
   return impl_->slot[axis].table_m();
@@ -377,6 +418,30 @@ int64_t VirtualBoard::lost_full_steps(int axis) const {
 }
 int VirtualBoard::configured_axes() const {
   return impl_->naxes;
+}
+void VirtualBoard::turn_handwheel(int detents, double seconds) {
+  if (!(seconds >= 0 && seconds <= 3600))
+    throw mc::host::InputError("handwheel turn", mc::host::format_number(seconds) + " s", "0 to 3600 s");
+  // A thousand turns of the wheel at most: edge times stay far inside 64 bits.
+  if (std::abs(detents) > kMaxHandwheelDetents)
+    throw mc::host::InputError("handwheel turn", std::to_string(detents) + " detents",
+                               "at most " + std::to_string(kMaxHandwheelDetents) + " either way");
+  if (detents == 0) return;
+  Impl& b = *impl_;
+  const int64_t edges = int64_t(detents) * kHandwheelCountsPerDetent;
+  const uint64_t n = uint64_t(std::llabs(edges));
+  Impl::Turn t;
+  t.start = std::max(b.cycles, b.wheel_free);
+  t.span = std::max(uint64_t(std::llround(seconds * b.m.clock_hz)), n * kHandwheelEdgeClocks);
+  t.edges = edges;
+  b.turns.push_back(t);
+  b.wheel_free = t.start + t.span;
+}
+int64_t VirtualBoard::handwheel_count() const {
+  return impl_->wheel;
+}
+double VirtualBoard::handwheel_done_s() const {
+  return double(impl_->wheel_free) / clock_hz();
 }
 void VirtualBoard::tap_segments(std::vector<uint32_t>* words) {
   impl_->board->tap_segments(words);
@@ -461,8 +526,16 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     return true;
   };
 
+  // The pseudo-terminal and the wheel socket: either wakes a sleep.
+  pollfd fds[2] = {{fd, POLLIN, 0}, {opt.wheel ? opt.wheel->fd() : -1, POLLIN, 0}};
+  const auto wheel_asks = [&] {
+    if (!opt.wheel || !opt.wheel->serve(board)) return;
+    last_host = Clock::now();
+  };
+
   while (!stop.load()) {
     if (board.rx_backlog() < 64) take_input();
+    wheel_asks();
     board.run(slice, out);
     if (!out.empty()) {
       const ssize_t n = ::write(fd, out.data(), out.size());
@@ -494,21 +567,20 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
       // wake-up from the OS eats into the lead instead of making the next
       // periods late. A host byte ends the sleep.
       if (ahead > kLead) {
-        pollfd p{fd, POLLIN, 0};
         const double wait = ahead - kLead / 2;
         const timespec ts{time_t(wait), long((wait - std::floor(wait)) * 1e9)};
-        ::ppoll(&p, 1, &ts, nullptr);
+        ::ppoll(fds, 2, &ts, nullptr);
       }
     } else {
       st.model_bound = true;
     }
-    if (board.dormant() && board.rx_backlog() == 0) {
+    // A client waiting for its turn's answer gets it first (the next round).
+    if (board.dormant() && board.rx_backlog() == 0 && !(opt.wheel && opt.wheel->waiting())) {
       st.dormant = true;
       report(true);
       const auto since = Clock::now();
       while (!stop.load()) {
-        pollfd p{fd, POLLIN, 0};
-        if (::poll(&p, 1, 200) > 0 && take_input()) break;
+        if (::poll(fds, 2, 200) > 0 && (take_input() || fds[1].revents)) break;
         if (opt.idle_exit_s > 0 && seconds_since(last_host) > opt.idle_exit_s) break;
       }
       paused_s += seconds_since(since);

@@ -23,7 +23,12 @@
 // switch_m in the switch's direction; the probe pin is high while the Z
 // axis's tool tip is at or below the [workpiece] face (surface_z_mm) under
 // it. Both change at plant-step boundaries and bounce for their bounce_s
-// after each change. The e-stop and handwheel inputs stay inactive.
+// after each change. The e-stop input stays inactive.
+//
+// Handwheel (turn_handwheel): a 100-PPR manual pulse generator on HW_A/HW_B,
+// four quadrature counts a detent, each edge at its own clock (not at a
+// plant-step boundary: a hand is not synchronous with anything), on both
+// engines alike; the twin's fast-forward stops before every edge.
 // Outputs: every change of SP_EN, SP_DIR or FLOOD is logged at its clock,
 // with SP_PWM's high clocks since the change before (spindle_log()).
 #pragma once
@@ -40,11 +45,19 @@
 namespace mc::sim {
 
 using mc::machine::MachineConfig;
+class WheelSocket;
 
 constexpr int kBoardAxes = 3;
 // The longest watchdog period the board can hold (WDOG is 24 bits): after
 // this long without a frame the drives are off for sure.
 constexpr uint64_t kMaxWatchdogClocks = uint64_t(1) << 24;
+// The handwheel: quadrature counts a detent (a 100-PPR wheel has 100 detents
+// and 400 counts a turn), and the fewest clocks between two of its edges:
+// above the decoder's longest filter (HW_CFG, 15 clocks) and its
+// synchronizer, so that no edge is lost to them.
+constexpr int kHandwheelCountsPerDetent = 4;
+constexpr uint64_t kHandwheelEdgeClocks = 32;
+constexpr int kMaxHandwheelDetents = 100'000;
 
 // What clocks the board: the twin of the board top (hls/), which skips the
 // clocks in which only counters move, or the Verilated top, every clock.
@@ -132,6 +145,21 @@ class VirtualBoard {
   // the twin's skipped ones included).
   uint64_t spindle_high_clocks() const;
 
+  // Turns the handwheel by `detents` (negative: backwards), its 4 * |detents|
+  // quadrature edges on HW_A/HW_B spread evenly over the next `seconds` of
+  // board time (the last one at the end), as a hand turning it steadily
+  // would. A turn asked while one is still going follows it (one hand, one
+  // wheel). Edges closer than kHandwheelEdgeClocks are spread to that: the
+  // board's decoder, whatever its HW_CFG filter, sees every one. Throws
+  // InputError for seconds outside 0..3600 or more than
+  // kMaxHandwheelDetents detents.
+  void turn_handwheel(int detents, double seconds);
+  // The count HW_A/HW_B show now (0 at power-up: the wheel's own count, not
+  // the board's HW_POS, which counts what its decoder saw), and the board
+  // time at which the turns asked so far are done (in the past: at rest).
+  int64_t handwheel_count() const;
+  double handwheel_done_s() const;
+
   // For link checks: appends to *words every 32-bit word the board writes
   // into its segment queue, in order, as it writes it (10 per segment,
   // hls/interp_seg.hpp); nullptr stops. Both engines.
@@ -187,13 +215,17 @@ struct ServeOptions {
   // not turn into board time (0: never wait, the fastest).
   double host_wait_s = 0;
   std::function<void(const ServeStatus&)> status;
+  // Turns of the handwheel from other processes (sim/vboard/wheel_socket.hpp),
+  // taken between runs; a request counts as host activity. nullptr: none.
+  WheelSocket* wheel = nullptr;
 };
 
 // Runs the board on the pseudo-terminal until `stop` becomes true or the
 // idle limit passes. Host bytes go onto RX as they come; TX bytes go out as
 // the board sends them (dropped, and counted, when no host reads and the
 // terminal's buffer is full). A dormant board (VirtualBoard::dormant) waits
-// for the next host byte with its clock stopped instead of burning a core.
+// for the next host byte or wheel request with its clock stopped instead of
+// burning a core.
 ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const std::atomic<bool>& stop);
 
 }  // namespace mc::sim
