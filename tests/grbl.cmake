@@ -49,3 +49,9 @@ add_test(NAME GrblClient.bcnc.sim
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_bcnc.py $<TARGET_FILE:motionctl> --sim)
 set_tests_properties(GrblClient.bcnc.sim PROPERTIES LABELS client TIMEOUT 180)
 target_compile_definitions(test_grbl_board PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+# A job's start from cncjs on the virtual board: home ($H), touch off (G38.2,
+# G10 L20) and an engraving levelled by the map `motionctl level probe` took
+# (serve --level).
+add_test(NAME GrblClient.cncjs.cycles
+  COMMAND ${MC_NODE} ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_cncjs.js $<TARGET_FILE:motionctl> ${MC_CNCJS_DIR} --cycles)
+set_tests_properties(GrblClient.cncjs.cycles PROPERTIES LABELS client TIMEOUT 450)

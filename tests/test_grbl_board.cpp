@@ -597,6 +597,49 @@ TEST(GrblBoard, LevellingFollowsTheMapAndSwitchesOffAndOn) {
   expect_at(rig.status(), 5, 5, -1, 3 * kCount);
 }
 
+// $MPG on the board: the wheel jogs the axis the sender selected by its
+// step a detent while nothing else runs (HW: in the status report), a line
+// takes the wheel off and starts where it left the axis, and the parser
+// knows where that is.
+TEST(GrblBoard, TheHandwheelJogsTheAxisASenderSelected) {
+  BoardRig rig;
+  const size_t from = rig.out().size();
+  rig.send("$MPG\n$MPG=Q5\n$MPG=X1000\n$MPG=X10\n$MPG\n");
+  EXPECT_NE(rig.out().find("[MPG:OFF]\r\nok\r\nerror:3\r\nerror:3\r\nok\r\n[MPG:X10]\r\nok", from),
+            std::string::npos)
+      << rig.out().substr(from);
+  rig.step();
+  const size_t n = rig.out().size();
+  rig.send("?");
+  EXPECT_NE(rig.out().find("|HW:X,10", n), std::string::npos) << rig.out().substr(n);
+  // Five detents: 50 counts on X.
+  rig.board().turn_handwheel(5, 0.05);
+  rig.run_for(0.3);
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(0, br::AX_CMD))), 50);
+  expect_at(rig.status(), 50 * kCount, 0, 0);
+  // An incremental line runs from there; the wheel is off while it runs.
+  rig.send("G91 G1 X1 F600\n");
+  ASSERT_TRUE(rig.run_until([&] { return rig.status().state == "Run"; }, 1));
+  const size_t m = rig.out().size();
+  rig.send("?");
+  EXPECT_EQ(rig.out().find("|HW:", m), std::string::npos) << rig.out().substr(m);
+  rig.board().turn_handwheel(3, 0.01);  // turned while the line runs: dropped
+  ASSERT_TRUE(rig.run_until_state("Idle", 5));
+  rig.run_for(0.3);
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(0, br::AX_CMD))), 450);
+  // Back on once idle: Y now, one count a detent.
+  rig.send("$MPG=Y1\n");
+  rig.run_for(0.05);
+  rig.board().turn_handwheel(-4, 0.02);
+  rig.run_for(0.3);
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(1, br::AX_CMD))), -4);
+  rig.send("$MPG=0\n");
+  rig.board().turn_handwheel(4, 0.02);
+  rig.run_for(0.3);
+  EXPECT_EQ(int32_t(rig.link().read(br::axis(1, br::AX_CMD))), -4) << "off: the wheel moves nothing";
+  EXPECT_EQ(rig.out().find("ALARM"), std::string::npos) << rig.out();
+}
+
 TEST(GrblBoard, JogCancelAndSoftResetStopShortAndTheNextMoveStartsThere) {
   BoardRig rig;
   rig.send("$J=G91 X30 F1800\n");

@@ -5,13 +5,22 @@
 // resumes it, raises the feed override, and waits until the workflow is idle
 // with every line acknowledged and the machine at the job's end point.
 //
-// usage: node test_grbl_cncjs.js MOTIONCTL CNCJS_DIR [--dry-run|--sim]
+// usage: node test_grbl_cncjs.js MOTIONCTL CNCJS_DIR [--dry-run|--sim|--cycles]
 //   CNCJS_DIR: where scripts/deps.sh installed cncjs (node_modules/cncjs).
 //   --sim: `motionctl --sim serve`, the board backend on a virtual board of
 //   the test's own (a private runtime directory, stopped at the end), with a
 //   shorter job: it runs in real time. MPos is then the encoders' position,
 //   which a stop reports once the servo is within 2 counts (5 um) of its
 //   command.
+//   --cycles: a job's start as an operator does it, on the virtual board.
+//   Before the sender connects, `motionctl home` and `motionctl level probe`
+//   map the bed (the server holds the board while it serves), and `serve
+//   --level` takes the map. Then cncjs homes ($H, after $22=1), moves over
+//   the map's first point, probes Z down to the work (G38.2, as its probe
+//   widget does), sets work Z0 there (G10 L20), and runs an engraving 0.1 mm
+//   deep that ends on the map's point furthest from the first one's height:
+//   the work Z there must be -0.1 mm plus the map's height, which the server
+//   added.
 'use strict';
 
 const { spawn } = require('child_process');
@@ -21,8 +30,9 @@ const os = require('os');
 const path = require('path');
 
 const [motionctl, cncjsDir, mode = '--dry-run'] = process.argv.slice(2);
-if (mode !== '--dry-run' && mode !== '--sim') {
-  console.error('usage: node test_grbl_cncjs.js MOTIONCTL CNCJS_DIR [--dry-run|--sim]');
+const sim = mode === '--sim' || mode === '--cycles';
+if (mode !== '--dry-run' && !sim) {
+  console.error('usage: node test_grbl_cncjs.js MOTIONCTL CNCJS_DIR [--dry-run|--sim|--cycles]');
   process.exit(2);
 }
 const endTolerance = 0.005;  // mm: the servo's in-position band on --sim; exact on --dry-run
@@ -36,7 +46,7 @@ const jwt = require(path.join(modules, 'jsonwebtoken'));
 
 const work = fs.mkdtempSync(path.join(os.tmpdir(), 'mc_cncjs_'));
 const link = path.join(work, 'motioncore');
-const env = mode === '--sim' ? { ...process.env, XDG_RUNTIME_DIR: work } : process.env;
+const env = sim ? { ...process.env, XDG_RUNTIME_DIR: work } : process.env;
 const t0 = Date.now();
 const children = [];
 let failed = false;  // set once the run is decided: children's exits no longer count
@@ -51,7 +61,7 @@ function finish(code, why) {
     : new Promise((resolve) => c.once('exit', resolve))));
   for (const c of children) c.kill('SIGTERM');
   Promise.all(exited).then(() => {
-    if (mode === '--sim') require('child_process').spawnSync(motionctl, ['sim', 'stop'], { env });
+    if (sim) require('child_process').spawnSync(motionctl, ['sim', 'stop'], { env });
     fs.rmSync(work, { recursive: true, force: true });
     process.exit(code);
   });
@@ -61,7 +71,8 @@ function fail(why) {
   finish(1, `FAIL: ${why}\n${dump()}`);
 }
 // Only a guard: every step below waits on an event from cncjs.
-setTimeout(() => fail('the job did not finish within 120 s'), 120000).unref();
+const guardS = mode === '--cycles' ? 400 : 120;
+setTimeout(() => fail(`the job did not finish within ${guardS} s`), guardS * 1000).unref();
 
 function freePort() {
   return new Promise((resolve) => {
@@ -99,7 +110,8 @@ async function main() {
   // --sim: the virtual board is paced to the wall clock and catches up after
   // the OS has descheduled it, which a loaded machine does for longer than the
   // board's 100 ms watchdog: give it a second.
-  const machine = mode === '--sim' ? ['--sim', 'serve', '--watchdog', '1s'] : ['serve', '--dry-run'];
+  const machine = sim ? ['--sim', 'serve', '--watchdog', '1s'] : ['serve', '--dry-run'];
+  if (mode === '--cycles') machine.push('--level', await mapTheBed());
   const serve = spawn(motionctl, [...machine, '--pty', link, '--settings', path.join(work, 'grbl.toml')], { env });
   children.push(serve);
   serve.stderr.on('data', (d) => process.stderr.write(`serve: ${d}`));
@@ -159,6 +171,10 @@ async function main() {
   }));
   await until(() => state.activeState === 'Idle');
   console.log(`cncjs opened ${link}: Idle`);
+  if (mode === '--cycles') {
+    await cycles(socket, until, { reads: () => reads, state: () => state, workflow: () => workflow, sender: () => sender });
+    return;
+  }
 
   const text = job();
   const lines = text.trim().split('\n').length;
@@ -211,6 +227,72 @@ async function main() {
     return;
   }
   finish(0, `PASS: cncjs ran the job to its end on motionctl serve ${mode} in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+}
+
+// --cycles: home, then probe the bed's map with the CLI, before serving.
+const bedMap = path.join(work, 'bed.toml');
+const area = [20, 20, 100, 80];  // X0, Y0, X1, Y1 (mm): a 3 x 2 grid
+async function mapTheBed() {
+  const { spawnSync } = require('child_process');
+  for (const args of [['--sim', 'home'], ['--sim', 'level', 'probe', '--grid', '3x2', '--area', area.join(','), '-o', bedMap]]) {
+    const r = spawnSync(motionctl, args, { env, encoding: 'utf8' });
+    if (r.status !== 0) throw new Error(`motionctl ${args.join(' ')} failed (${r.status}):\n${r.stdout}${r.stderr}`);
+    console.log(`motionctl ${args.join(' ')}: ${r.stdout.trim().split('\n').slice(-2).join(' / ')}`);
+  }
+  return bedMap;
+}
+
+async function cycles(socket, until, { reads, state, workflow, sender }) {
+  const lastRead = (re, from) => reads().slice(from).find((l) => re.test(l));
+  // Every line of `text` answered `ok`, then Idle (reported once the servos settled).
+  const gcode = async (text) => {
+    const n = reads().length;
+    const count = text.trim().split('\n').length;
+    socket.emit('command', link, 'gcode', text);
+    await until(() => reads().slice(n).filter((l) => l === 'ok').length >= count);
+    await new Promise((resolve) => setTimeout(resolve, 600));  // cncjs polls `?` every 250 ms
+    await until(() => state().activeState === 'Idle');
+    return n;
+  };
+  // Homing: $22=1, then cncjs's homing command ($H); Home while it runs.
+  await gcode('$22=1');
+  socket.emit('command', link, 'homing');
+  await until(() => state().activeState === 'Home');
+  await until(() => state().activeState === 'Idle');
+  console.log(`homed: MPos ${JSON.stringify(state().mpos)}`);
+  // Touch off on the map's first point, as cncjs's probe widget does.
+  const from = await gcode(`G90 G0 X${area[0]} Y${area[1]}\nG91\nG38.2 Z-20 F300\nG90\nG10 L20 P1 Z0\nG91\nG0 Z2\nG90`);
+  const prb = lastRead(/^\[PRB:/, from);
+  if (!prb || !/:1\]$/.test(prb)) throw new Error(`no probe contact: ${prb}`);
+  console.log(`probed: ${prb}`);
+  // The map's grid point that lies furthest from the first point's height.
+  const rows = /heights_mm = \[([\s\S]*)\]/.exec(fs.readFileSync(bedMap, 'utf8'))[1].trim().split('\n')
+    .map((r) => r.replace(/[[\]\s]/g, '').split(',').filter((v) => v !== '').map(Number));
+  let end = { i: 0, j: 0, h: 0 };
+  rows.forEach((r, j) => r.forEach((h, i) => { if (Math.abs(h) > Math.abs(end.h)) end = { i, j, h }; }));
+  const ex = area[0] + end.i * (area[2] - area[0]) / (rows[0].length - 1);
+  const ey = area[1] + end.j * (area[3] - area[1]) / (rows.length - 1);
+  const h = end.h;
+  // The engraving, in work coordinates: down 0.1 mm at the first point, cuts
+  // along X and Y to the map's far corner, then to that point, staying there
+  // at depth.
+  const job = `G21 G90 G54\nG0 X${area[0]} Y${area[1]} Z1\nG1 Z-0.1 F300\nG1 X${area[2]} F1500\nG1 Y${area[3]}\n` +
+    `G1 X${ex} Y${ey}\n`;
+  await new Promise((resolve) => socket.emit('command', link, 'gcode:load', 'engrave.nc', job, {}, resolve));
+  socket.emit('command', link, 'gcode:start');
+  await until(() => workflow() === 'running');
+  await until(() => workflow() === 'idle' && sender().total > 0 && sender().received === sender().total &&
+    state().activeState === 'Idle');
+  await new Promise((resolve) => setTimeout(resolve, 600));
+  const w = state().wpos;
+  const want = -0.1 + h;
+  console.log(`engraved: ended at X${ex} Y${ey}, the map's height there ${h} mm, work Z ${w.z} (want ${want.toFixed(4)})`);
+  if (Math.abs(h) < 0.05) throw new Error(`the map (${JSON.stringify(rows)}) is too flat to show levelling`);
+  if (Math.abs(Number(w.z) - want) > endTolerance || Math.abs(Number(w.x) - ex) > endTolerance ||
+      Math.abs(Number(w.y) - ey) > endTolerance) {
+    throw new Error(`the job ended at work ${JSON.stringify(w)}, not X${ex} Y${ey} Z${want.toFixed(4)}`);
+  }
+  finish(0, `PASS: cncjs homed, probed and ran a levelled job on motionctl --sim serve --level in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
 }
 
 main().catch((e) => fail(e.stack || String(e)));

@@ -28,6 +28,18 @@ TEST(GrblProtocol, PowerUpPrintsTheBannerOnly) {
   EXPECT_EQ(r.send(""), "");
 }
 
+// $MPG and $LEV are MotionCore's; on a machine without a handwheel or a
+// height map (the dry-run machine) they say "setting disabled".
+TEST(GrblProtocol, HandwheelAndLevellingWithoutThemAreSettingDisabled) {
+  Rig r;
+  EXPECT_EQ(r.send("$MPG\n"), "error:5\r\n");
+  EXPECT_EQ(r.send("$MPG=X10\n"), "error:5\r\n");
+  EXPECT_EQ(r.send("$LEV\n"), "[LEV:OFF]\r\nok\r\n");
+  EXPECT_EQ(r.send("$LEV=1\n"), "error:5\r\n");
+  EXPECT_EQ(r.send("$LEV=0\n"), "ok\r\n");
+  EXPECT_EQ(r.send("$LEV=2\n"), "error:3\r\n");
+}
+
 TEST(GrblProtocol, OneAnswerPerLineWithGrblsErrorCodes) {
   Rig r;
   EXPECT_EQ(r.send("G21\n"), "ok\r\n");

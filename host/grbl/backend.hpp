@@ -57,6 +57,9 @@ struct Status {
   int blocks_free = 0;  // planner blocks free (Bf's first number)
   int line_number = 0;  // N word of the line executing, 0: none
   Pins pins;
+  // The handwheel while it jogs an axis: "X,10" (axis, counts a detent) for
+  // the HW: field, "" otherwise.
+  std::string handwheel;
 };
 
 // Feed, rapid and spindle overrides in percent (Grbl's Ov: field). The
@@ -139,6 +142,13 @@ class Backend {
   virtual std::string height_map() const { return ""; }
   virtual bool levelling() const { return false; }
   virtual int set_levelling(bool on) { return on ? 5 : 0; }
+
+  // The handwheel ($MPG, not Grbl's): the selection as $MPG reports it
+  // ("X10", "OFF"), "" when the machine has none. set_mpg() takes "X10",
+  // "Y1", "Z100" or "0" (off) and returns a Grbl status code: 0, 3 a bad
+  // selection, 5 no handwheel. The wheel jogs only while nothing else runs.
+  virtual std::string mpg() const { return ""; }
+  virtual int set_mpg(const std::string& selection) { return selection == "0" ? 0 : 5; }
 };
 
 }  // namespace mc::grbl

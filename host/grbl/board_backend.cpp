@@ -20,6 +20,7 @@ namespace bb = board::bits;
 using mc::host::JobStreamer;
 
 constexpr int kSettingDisabled = 5;
+constexpr int kInvalidStatement = 3;
 constexpr int kNotIdle = 8;
 constexpr int kAlarmHardLimit = 1;
 constexpr int kAlarmSoftLimit = 2;
@@ -70,6 +71,8 @@ BoardBackend::BoardBackend(mc::host::BoardLink& l, const mc::machine::MachineCon
   s_ = std::make_unique<JobStreamer>(l_, cfg_, b.at, m.planner.queue_ahead_s);
   s_->on_action = [this](const mc::host::Move& mv) { action(mv); };
   armed_ = true;
+  has_wheel_ = bb::info_handwheel(l_.read(br::INFO));
+  if (has_wheel_) mc::machine::set_mpg(l_, machine_, {});  // the sender selects it ($MPG)
   read_positions();
 }
 
@@ -114,6 +117,7 @@ void BoardBackend::arm() {
 }
 
 void BoardBackend::submit(Submission line) {
+  release_wheel();
   const int key = next_key_++;
   for (gcode::CanonCall& c : line.calls) c.line = key;
   // A probe runs as its own cycle once everything before it is done; the
@@ -257,6 +261,43 @@ void BoardBackend::tick() {
   } else {
     while (!lines_.empty() && lines_.front().first < c->line) lines_.pop_front();
   }
+  update_wheel();
+}
+
+std::string BoardBackend::mpg() const {
+  if (!has_wheel_) return "";
+  if (!mpg_.on()) return "OFF";
+  return std::string(1, "XYZ"[mpg_.axis]) + std::to_string(mpg_.step);
+}
+
+int BoardBackend::set_mpg(const std::string& selection) {
+  if (!has_wheel_) return kSettingDisabled;
+  mc::machine::MpgSetting s;
+  try {
+    s = mc::machine::parse_mpg(selection == "0" ? "off" : selection);
+  } catch (const mc::host::InputError&) {
+    return kInvalidStatement;
+  }
+  if (s.on() && (size_t(s.axis) >= machine_.axes.size() || !cfg_.axes[size_t(s.axis)].present))
+    return kInvalidStatement;
+  mpg_ = s;
+  update_wheel();
+  return 0;
+}
+
+void BoardBackend::update_wheel() {
+  const bool idle = armed_ && !homing_ && !probe_ && lines_.empty() && s_->drained() && !settling_;
+  if (!idle || !mpg_.on()) return release_wheel();
+  if (wheel_on_ == mpg_) return;
+  mc::machine::set_mpg(l_, machine_, mpg_);
+  wheel_on_ = mpg_;
+}
+
+void BoardBackend::release_wheel() {
+  if (!wheel_on_.on()) return;
+  mc::machine::set_mpg(l_, machine_, {});
+  wheel_on_ = {};
+  if (armed_) s_->restart(mc::host::abort_interpolator(l_));
 }
 
 void BoardBackend::read_positions() {
@@ -310,6 +351,8 @@ Status BoardBackend::status() const {
   }
   if (homing_) s.motion = Motion::homing;
   if (probe_ && probe_->cycle) s.motion = Motion::run;
+  if (wheel_on_.on())
+    s.handwheel = std::string(1, "XYZ"[wheel_on_.axis]) + "," + std::to_string(wheel_on_.step);
   s.position = pos_;
   s.feed_mm_min = c ? c->feed_mm_s * 60 : 0;
   s.spindle = spindle_.dir;
@@ -331,6 +374,7 @@ std::optional<Event> BoardBackend::poll_event() {
 }
 
 int BoardBackend::home(unsigned axis_mask) {
+  release_wheel();
   if (homing_ || probe_ || !lines_.empty() || (armed_ && !s_->drained())) return kNotIdle;
   unsigned mask = 0;
   for (size_t a = 0; a < machine_.axes.size() && a < 3; ++a)

@@ -30,6 +30,7 @@
 #include "host/machine/cycles.hpp"
 #include "host/machine/height_map.hpp"
 #include "host/machine/machine_config.hpp"
+#include "host/machine/mpg.hpp"
 #include "host/machine/spindle.hpp"
 #include "host/motion/job_stream.hpp"
 
@@ -72,6 +73,8 @@ class BoardBackend : public Backend {
   // not a jog is levelled with it (host/machine/height_map.hpp) while
   // levelling is on, which this turns on. `name`: what $LEV calls it.
   void set_height_map(const mc::machine::HeightMap& map, const std::string& name);
+  std::string mpg() const override;
+  int set_mpg(const std::string& selection) override;
 
   // The planner's limits now ($110.. and $120.. within the machine's).
   const mc::host::PlannerConfig& planner() const { return cfg_; }
@@ -88,6 +91,11 @@ class BoardBackend : public Backend {
   // it stands, in the board's (possibly new) machine frame.
   void resync();
   void cycle_failed(int alarm, const std::string& what);
+  // The handwheel jogs while nothing else runs: on the board while idle,
+  // off (what is pending dropped) before anything else moves, the streamer
+  // then starting where the wheel left the command.
+  void update_wheel();
+  void release_wheel();
 
   mc::host::BoardLink& l_;
   mc::machine::MachineConfig machine_;
@@ -125,6 +133,8 @@ class BoardBackend : public Backend {
   std::optional<mc::machine::HeightMap> map_;
   std::string map_name_;
   bool level_on_ = false;
+  bool has_wheel_ = false;                  // the board's INFO
+  mc::machine::MpgSetting mpg_, wheel_on_;  // as the sender selected; as the board has it
 };
 
 }  // namespace mc::grbl

@@ -290,6 +290,7 @@ void Engine::status_report() {
   if (p.hold) pins += 'H';
   if (p.start) pins += 'S';
   if (!pins.empty()) r += "|Pn:" + pins;
+  if (!s.handwheel.empty()) r += "|HW:" + s.handwheel;
 
   // WCO: and Ov: on Grbl's schedule: every 10th report when idle, every
   // 30th/20th when busy, at once after a change, never both in one report.
@@ -485,6 +486,7 @@ bool Engine::soft_limit_violated(const std::vector<gcode::CanonCall>& calls) con
 }
 
 void Engine::gcode_line(const std::string& line, const std::string& prefix) {
+  sync_to_handwheel();
   const gcode::PersistentData before = interp_.data();
   const gcode::Vec3 wco_before = wco();
   gcode::LineResult res = interp_.execute_line(line, ++line_count_);
@@ -589,7 +591,15 @@ void Engine::persist() {
 
 // --- $ commands ----------------------------------------------------------------
 
+void Engine::sync_to_handwheel() {
+  // The wheel moved the machine since the parser last knew where it was:
+  // the next line starts there, as after a jog.
+  const Status s = backend_.status();
+  if (!s.handwheel.empty()) interp_.set_machine_position(s.position);
+}
+
 int Engine::jog(const std::string& line) {
+  sync_to_handwheel();
   if (line.size() < 3 || line[2] != '=') return kInvalidStatement;
   const std::string words = line.substr(3);
   // Only G20/G21, G90/G91, G53, the axes, F and N (Grbl's jog rules).
@@ -645,6 +655,20 @@ int Engine::levelling(const std::string& l) {
   return backend_.set_levelling(l.back() == '1');
 }
 
+// $MPG: the handwheel (not Grbl's), reported as [MPG:X10] or [MPG:OFF];
+// $MPG=X10 puts it on X at 10 counts a detent, $MPG=0 turns it off. The
+// status report shows the axis it jogs as HW:X,10.
+int Engine::handwheel(const std::string& l) {
+  const std::string now = backend_.mpg();
+  if (now.empty()) return kSettingDisabled;
+  if (l == "$MPG") {
+    emit("[MPG:" + now + "]");
+    return kOk;
+  }
+  if (l.size() < 6 || l[4] != '=') return kInvalidStatement;
+  return backend_.set_mpg(l.substr(5));
+}
+
 int Engine::system_command(const std::string& l) {
   Settings& set = stored_.settings;
   const Motion m = backend_.status().motion;
@@ -691,6 +715,7 @@ int Engine::system_command(const std::string& l) {
   // The rest needs Idle or Alarm.
   if (!(idle || (alarm_ && !sleep_))) return kNotIdle;
   if (l.rfind("$LEV", 0) == 0) return levelling(l);
+  if (l.rfind("$MPG", 0) == 0) return handwheel(l);
   switch (c) {
     case '#': {
       if (l.size() != 2) return kInvalidStatement;

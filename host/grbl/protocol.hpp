@@ -100,6 +100,8 @@ class Engine {
   void gcode_line(const std::string& line, const std::string& prefix);
   int system_command(const std::string& line);
   int levelling(const std::string& line);
+  int handwheel(const std::string& line);
+  void sync_to_handwheel();
   int jog(const std::string& line);
   void advance_pending();
   void reply(int code, const std::string& prefix = "");
