@@ -126,6 +126,13 @@ TEST(CliRefusals, EachBadInputIsRefusedAndTheBoardIsUnchanged) {
       // A bandwidth no PID sampled at 100 us reaches, before the experiment.
       {{"tune", "--axis", "x", "--bandwidth", "1e12"}, "Nyquist"},
       // An empty axis name is not "every axis".
+      {{"level", "probe", "--area", "5,5,1", "-o", dir + "/m.toml"},
+       "--area = \"5,5,1\": expected X0,Y0,X1,Y1"},
+      {{"level", "probe", "--area", "5,5,1,1", "-o", dir + "/m.toml"}, "X0 < X1 and Y0 < Y1"},
+      {{"level", "probe", "--area", "5,5,10,10", "--grid", "1x3", "-o", dir + "/m.toml"}, "--grid = \"1x3\""},
+      {{"level", "probe", "--area", "5,5,500,10", "-o", dir + "/m.toml"}, "within axis x's travel"},
+      {{"level", "probe", "--area", "5,5,10,10", "--feed", "0", "-o", dir + "/m.toml"}, "--feed = 0"},
+      {{"level", "probe", "--area", "5,5,10,10", "-o", dir + "/no/such/dir/m.toml"}, "-o"},
       {{"disable", "--axis", ""}, "--axis = \"\""},
       {{"enable", "--axis", ""}, "--axis = \"\""},
   };

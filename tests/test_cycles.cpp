@@ -232,10 +232,10 @@ TEST(Probing, AGridMapsTheFaceRelativeToItsFirstPoint) {
   o.y1 = 130;
   int calls = 0;
   const machine::ProbedGrid g = machine::probe_grid(r.link, m, o, {}, [&](int done, int total) {
-    EXPECT_EQ(done, ++calls);
+    EXPECT_EQ(done, calls++);
     EXPECT_EQ(total, 6);
   });
-  EXPECT_EQ(calls, 6);
+  EXPECT_EQ(calls, 7);  // ready, then each point
   ASSERT_EQ(g.map.nx, 3);
   ASSERT_EQ(g.map.ny, 2);
   EXPECT_DOUBLE_EQ(g.map.x1(), 180);

@@ -57,17 +57,18 @@ void probe(ProbeOptions o) {
   parse_grid(o.grid, o.g.nx, o.g.ny);
   parse_area(o.area, o.g);
   require_writable_file(o.out, "-o");
+  mc::machine::check_probe_grid(o.g);
   const auto m = machine();
   Board b = open_board();
   const int total = o.g.nx * o.g.ny;
-  if (!o.json)
-    std::printf("probing %d x %d points over X%s..%s Y%s..%s on %s\n", o.g.nx, o.g.ny,
-                format_number(o.g.x0).c_str(), format_number(o.g.x1).c_str(), format_number(o.g.y0).c_str(),
-                format_number(o.g.y1).c_str(), b.where.c_str());
-  std::fflush(stdout);
   const mc::machine::ProbedGrid g = mc::machine::probe_grid(*b.link, m, o.g, note, [&](int done, int) {
     if (o.json) return;
-    std::printf("\r%d of %d points", done, total);
+    if (done == 0)
+      std::printf("probing %d x %d points over X%s..%s Y%s..%s on %s\n", o.g.nx, o.g.ny,
+                  format_number(o.g.x0).c_str(), format_number(o.g.x1).c_str(), format_number(o.g.y0).c_str(),
+                  format_number(o.g.y1).c_str(), b.where.c_str());
+    else
+      std::printf("\r%d of %d points", done, total);
     std::fflush(stdout);
   });
   std::ofstream(o.out) << mc::machine::format_height_map(g.map);

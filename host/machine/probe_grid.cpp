@@ -16,9 +16,7 @@ using mc::host::format_number;
 using mc::host::InputError;
 using mc::host::Vec3;
 
-namespace {
-
-void check_options(const ProbeGridOptions& o) {
+void check_probe_grid(const ProbeGridOptions& o) {
   if (o.nx < 2 || o.ny < 2 || o.nx > 100 || o.ny > 100)
     throw InputError("--grid", std::to_string(o.nx) + "x" + std::to_string(o.ny), "NxM points, each 2..100");
   if (!(o.x1 > o.x0) || !(o.y1 > o.y0) || !std::isfinite(o.x1 - o.x0) || !std::isfinite(o.y1 - o.y0))
@@ -32,31 +30,27 @@ void check_options(const ProbeGridOptions& o) {
     if (!(v > 0) || !std::isfinite(v)) throw InputError(what, format_number(v), "above 0");
 }
 
-}  // namespace
-
 ProbedGrid probe_grid(mc::host::BoardLink& l, const MachineConfig& m, const ProbeGridOptions& o,
                       const mc::host::Note& note, const std::function<void(int, int)>& progress) {
-  check_options(o);
+  check_probe_grid(o);
   if (m.axes.size() < 3) throw InputError("machine config", m.source, "a Z axis to probe with", "no axis z");
-  const JobBoard jb = ready_board(l, m, note);
-  const mc::host::PlannerConfig cfg = planner_config(m, jb.origin);
-  const mc::host::Vec3d start = mc::host::to_mm(jb.at, cfg);
+  // Every point and depth inside the travel before anything changes on the
+  // board (in the machine frame: the origin taken off).
+  const mc::host::MachineOrigin org = mc::host::read_origin(l);
+  const mc::host::PlannerConfig cfg = planner_config(m, org.counts);
+  const Vec3 start_counts = mc::host::start_position(l);
+  const mc::host::Vec3d start = mc::host::to_mm(start_counts, cfg);
   const double bottom = start[2] - o.depth_mm;
   const auto counts = [&](double x, double y, double z) { return mc::host::to_counts({x, y, z}, cfg); };
-  // Every point and depth inside the travel, before anything moves (the
-  // origin taken off: the check is in the machine frame).
-  const auto machine_frame = [&](Vec3 c) {
-    for (size_t k = 0; k < 3; ++k) c[k] -= cfg.axes[k].origin;
-    return c;
-  };
   const mc::host::Vec3d corners[] = {{o.x0, o.y0, bottom},
                                      {o.x1, o.y1, bottom},
                                      {o.x0, o.y1, start[2]},
                                      {o.x1, o.y0, start[2] + o.clearance_mm}};
   for (const mc::host::Vec3d& c : corners)
-    check_travel(m, machine_frame(jb.at), machine_frame(counts(c[0], c[1], c[2])),
+    check_travel(m, org.machine(start_counts), org.machine(counts(c[0], c[1], c[2])),
                  {"--area/--distance",
                   format_number(c[0]) + "," + format_number(c[1]) + " at Z" + format_number(c[2])});
+  const JobBoard jb = ready_board(l, m, note);
 
   ProbedGrid g;
   g.map.nx = o.nx;
@@ -80,6 +74,7 @@ ProbedGrid probe_grid(mc::host::BoardLink& l, const MachineConfig& m, const Prob
   };
   double highest = -1e300;
   int done = 0;
+  if (progress) progress(0, o.nx * o.ny);
   for (int j = 0; j < o.ny; ++j)
     for (int n = 0; n < o.nx; ++n) {
       // Back and forth along X: no move crosses the whole area empty.

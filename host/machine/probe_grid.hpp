@@ -27,13 +27,18 @@ struct ProbedGrid {
   double z0_mm = 0;  // machine Z of the contact at the first point
 };
 
+// InputError for a grid or an area probe_grid() would refuse (before any
+// board is touched; the travel is checked once the board is).
+void check_probe_grid(const ProbeGridOptions& o);
+
 // Probes the grid row by row (back and forth along X), starting where the
 // tool stands, which must be above the work: the first move goes to (x0, y0)
 // at that height. Between points the tool rises to clearance_mm above the
 // highest contact so far and moves there. Readies the board as a job does.
 // InputError for a bad grid or area, or one outside the travel; CycleError
 // 4 when the probe touches before a point's descent, 5 when a point finds
-// nothing within depth_mm. `progress(done, total)` after each point.
+// nothing within depth_mm. `progress(done, total)` once the checks passed
+// and the board is ready (done 0), then after each point.
 ProbedGrid probe_grid(mc::host::BoardLink& l, const MachineConfig& m, const ProbeGridOptions& o,
                       const mc::host::Note& note = {}, const std::function<void(int, int)>& progress = {});
 
