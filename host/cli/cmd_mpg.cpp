@@ -2,6 +2,7 @@
 // wheel moves and how many counts a detent, shown in mm for the machine;
 // with --seconds it also holds the drives armed while the wheel turns.
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -112,7 +113,7 @@ void mpg(const MpgOptions& o) {
   }
   if (!s.on()) throw InputError("--seconds", quote(o.seconds), "a handwheel on: select it with --axis");
   mm::require_ready(l, m, s.axis);
-  arm(l, note);
+  const std::array<int64_t, 3> start = arm(l, note);
   const MachineOrigin org = read_origin(l);
   const double scale = mm::counts_per_m(m.axes[size_t(s.axis)]);
   if (!o.json) {
@@ -127,6 +128,7 @@ void mpg(const MpgOptions& o) {
     std::fflush(stdout);
   });
   if (o.json) {
+    j["start_command"] = start[size_t(s.axis)];
     j["position"] = end.pos;
     j["command"] = end.cmd;
     j["position_mm"] = org.mm(s.axis, end.pos, scale);
