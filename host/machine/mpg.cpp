@@ -22,7 +22,6 @@ namespace {
 
 constexpr char kAxes[] = "xyz";
 constexpr uint32_t kStepMask = 3u << bb::M_STEP_LSB;
-constexpr uint32_t kRateMask = 0xFFu << bb::M_RATE_LSB;
 // Samples while following: well inside the board's shortest useful
 // watchdog (100 ms by default), and brisk enough to show a turn.
 constexpr std::chrono::milliseconds kFollowPoll{20};
