@@ -28,6 +28,11 @@ constexpr int kAlarmAbortCycle = 3;
 using mc::host::kInPosition;
 using mc::host::kSettleTimeout;
 
+// A handwheel selection as Grbl replies show it: "X10" ($MPG), "X,10" (HW:).
+std::string wheel_text(const mc::machine::MpgSetting& s, const char* between) {
+  return std::string(1, "XYZ"[s.axis]) + between + std::to_string(s.step);
+}
+
 bool limit_fault(uint32_t bits) {
   return bits & (0x7u << bb::F_LIMIT_LSB);
 }
@@ -251,7 +256,7 @@ void BoardBackend::tick() {
       fault(s_->fault());
     }
     // The moves before a probe are done and the axes in position: probe.
-    if (armed_ && probe_ && s_->drained() && !settling_) poll_probe();
+    if (probe_ && s_->drained() && !settling_) poll_probe();
   }
   read_positions();
   // Lines whose moves have all run.
@@ -267,7 +272,7 @@ void BoardBackend::tick() {
 std::string BoardBackend::mpg() const {
   if (!has_wheel_) return "";
   if (!mpg_.on()) return "OFF";
-  return std::string(1, "XYZ"[mpg_.axis]) + std::to_string(mpg_.step);
+  return wheel_text(mpg_, "");
 }
 
 int BoardBackend::set_mpg(const std::string& selection) {
@@ -351,8 +356,7 @@ Status BoardBackend::status() const {
   }
   if (homing_) s.motion = Motion::homing;
   if (probe_ && probe_->cycle) s.motion = Motion::run;
-  if (wheel_on_.on())
-    s.handwheel = std::string(1, "XYZ"[wheel_on_.axis]) + "," + std::to_string(wheel_on_.step);
+  if (wheel_on_.on()) s.handwheel = wheel_text(wheel_on_, ",");
   s.position = pos_;
   s.feed_mm_min = c ? c->feed_mm_s * 60 : 0;
   s.spindle = spindle_.dir;
