@@ -285,6 +285,107 @@ TEST(SimPlant, FrictionOffIsTheLinearModel) {
   EXPECT_EQ(p.speed_rad_s(), 0.0);
 }
 
+// hold() against step(): random voltages held for random stretches, with
+// stiction, reversals and rests. One plant takes every stretch with hold()
+// (again after each stop at a count change), the other steps one at a time;
+// each stop must be the first step whose count differs, and the two must end
+// every stretch in the same state, bit for bit. A third plant is an
+// independent reference: x <- Ad x + Bd u iterated, with the friction rules
+// of docs/plant.md written out here, which the runs may differ from only by
+// rounding (the runs take Ad^k from tables).
+void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretches) {
+  AxisPlant held(cfg, 1e-6), stepped(cfg, 1e-6);
+  held.set_friction(friction);
+  stepped.set_friction(friction);
+  const Eigen::Matrix3d ad = stepped.ad();
+  const Eigen::Matrix<double, 3, 2> bd = stepped.bd();
+  const MotorParams& m = cfg.motor;
+  Eigen::Vector3d ref = Eigen::Vector3d::Zero();
+  bool ref_stuck = friction;
+  const double rtc = cfg.encoder_cpr / (2 * kPi), tau_load = held.load_torque_nm();
+  const auto ref_step = [&](double v) {
+    double dir = ref(1) > 0 ? 1 : -1;
+    if (friction && ref_stuck) {
+      const double drive = m.kt_nm_per_a * ref(0) - tau_load;
+      if (std::fabs(drive) <= m.stiction_nm) {
+        ref(0) =
+            std::exp(-m.r_ohm / m.l_h * 1e-6) * ref(0) - std::expm1(-m.r_ohm / m.l_h * 1e-6) / m.r_ohm * v;
+        return;
+      }
+      ref_stuck = false;
+      dir = drive > 0 ? 1 : -1;
+    }
+    ref = ad * ref + bd * Eigen::Vector2d(v, tau_load + (friction ? dir * m.coulomb_nm : 0));
+    if (friction && ref(1) * dir <= 0) {
+      ref(1) = 0;
+      ref_stuck = true;
+    }
+  };
+  std::mt19937_64 rng(seed);
+  uint64_t stops = 0, count_mismatch = 0, total = 0;
+  double hold_s = 0;
+  double worst = 0;
+  for (int s = 0; s < stretches; ++s) {
+    // Mostly small voltages (stiction, slow creep), some large, some rests.
+    const int kind = int(rng() % 4);
+    const double v = kind == 0   ? 0.0
+                     : kind == 1 ? std::uniform_real_distribution<double>(-0.4, 0.4)(rng)
+                                 : std::uniform_real_distribution<double>(-48, 48)(rng) / (kind == 2 ? 8 : 1);
+    const uint64_t n = 1 + rng() % (rng() % 4 == 0 ? 20000 : 600);
+    uint64_t done = 0;
+    while (done < n) {
+      const int64_t before = held.encoder_count();
+      const auto t0 = std::chrono::steady_clock::now();
+      const uint64_t took = held.hold(v, n - done);
+      hold_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      total += took;
+      ASSERT_GE(took, 1u);
+      ASSERT_LE(took, n - done);
+      for (uint64_t k = 0; k < took; ++k) {
+        ASSERT_EQ(stepped.encoder_count(), before) << "stretch " << s << ": hold() passed a count change";
+        stepped.step(v);
+        ref_step(v);
+        // Another count is rounding only where the two angles straddle a
+        // count boundary.
+        const double c = ref(2) * rtc, gap = std::fabs(c - std::round(c));
+        if (int64_t(std::floor(c)) != stepped.encoder_count() &&
+            gap > std::fabs(ref(2) - stepped.position_rad()) * rtc)
+          ++count_mismatch;
+      }
+      if (took < n - done) {
+        ASSERT_NE(held.encoder_count(), before)
+            << "stretch " << s << ": hold() stopped without a count change";
+        ++stops;
+      }
+      done += took;
+      ASSERT_EQ(held.position_rad(), stepped.position_rad()) << "stretch " << s;
+      ASSERT_EQ(held.speed_rad_s(), stepped.speed_rad_s()) << "stretch " << s;
+      ASSERT_EQ(held.current_a(), stepped.current_a()) << "stretch " << s;
+      ASSERT_EQ(held.stuck(), stepped.stuck()) << "stretch " << s;
+    }
+    worst = std::max({worst, std::fabs(ref(2) - stepped.position_rad()) / std::max(1.0, std::fabs(ref(2))),
+                      std::fabs(ref(1) - stepped.speed_rad_s()) / std::max(1.0, std::fabs(ref(1)))});
+  }
+  std::printf(
+      "%s, friction %d: %d stretches, %llu steps, %llu stops at a count change, worst relative "
+      "difference from the iterated ZOH %.2g, %llu steps with another count beyond rounding; "
+      "hold() %.2f ns per step\n",
+      cfg.motor.l_h > 1e-3 ? "complex poles" : "default axis", friction, stretches, (unsigned long long)total,
+      (unsigned long long)stops, worst, (unsigned long long)count_mismatch, hold_s * 1e9 / double(total));
+  EXPECT_GT(stops, 100u);
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_EQ(count_mismatch, 0u);
+}
+
+TEST(SimPlant, HoldTakesTheStepsStepWouldTake) {
+  check_hold(default_x(), true, 1, 3000);
+  check_hold(default_x(), false, 2, 3000);
+  AxisConfig z = default_x();
+  z.load_force_n = 60;  // a Z axis: gravity through the screw
+  check_hold(z, true, 3, 3000);
+  check_hold(complex_pole_axis(), true, 4, 1000);
+}
+
 // The per-step cost, printed for docs/plant.md; not asserted (speed is never
 // asserted in unit tests). What is asserted is the long run's physics: under
 // a symmetric +-12 V square wave the axis settles into a periodic motion

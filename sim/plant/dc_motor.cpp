@@ -49,6 +49,42 @@ AxisPlant::AxisPlant(const AxisConfig& cfg, double dt_s) : m_(cfg.motor), dt_(dt
   // With w held at 0 only the electrical equation remains.
   stuck_a_ = std::exp(-m_.r_ohm / m_.l_h * dt_s);
   stuck_b_ = -std::expm1(-m_.r_ohm / m_.l_h * dt_s) / m_.r_ohm;
+
+  auto pw = std::make_shared<Powers>();
+  pw->ad.resize(kRun + 1);
+  pw->bd.resize(kRun + 1);
+  pw->stuck_a.resize(kRun + 1);
+  pw->stuck_b.resize(kRun + 1);
+  pw->ad[0].setIdentity();
+  pw->bd[0].setZero();
+  pw->stuck_a[0] = 1;
+  pw->stuck_b[0] = 0;
+  for (uint32_t k = 0; k < kRun; ++k) {
+    pw->ad[k + 1] = ad_ * pw->ad[k];
+    pw->bd[k + 1] = pw->bd[k] + pw->ad[k] * bd_;
+    pw->stuck_a[k + 1] = stuck_a_ * pw->stuck_a[k];
+    pw->stuck_b[k + 1] = pw->stuck_b[k] + pw->stuck_a[k] * stuck_b_;
+  }
+  pw_ = std::move(pw);
+  // The speed under a held input is a constant plus two exponentials of the
+  // electromechanical poles; with real poles its derivative has at most one
+  // zero, which is what hold()'s search needs (complex poles: step by step).
+  const double tr = m_.r_ohm / m_.l_h + m_.b_nm_s_per_rad / j_;
+  const double det = (m_.r_ohm * m_.b_nm_s_per_rad + m_.ke_v_s_per_rad * m_.kt_nm_per_a) / (m_.l_h * j_);
+  monotone_runs_ = tr * tr - 4 * det >= 0;
+}
+
+void AxisPlant::anchor(double v, double dir) {
+  x0_ = x_;
+  v_ = v;
+  dir_ = dir;
+  k_ = 0;
+  anchored_ = true;
+  u0_ = Eigen::Vector2d(v, tau_load_ + (friction_ && !stuck_ ? dir * m_.coulomb_nm : 0.0));
+}
+
+int64_t AxisPlant::count_of(const Eigen::Vector3d& x) const {
+  return int64_t(std::floor(x(2) * rad_to_count_));
 }
 
 double AxisPlant::driving_torque_nm() const {
@@ -57,35 +93,135 @@ double AxisPlant::driving_torque_nm() const {
 
 void AxisPlant::step(double v) {
   ++steps_;
-  if (!friction_) {
-    x_ = ad_ * x_ + bd_ * Eigen::Vector2d(v, tau_load_);
-    return;
-  }
-  double dir;
-  if (stuck_) {
+  if (!anchored_ || v != v_ || k_ == kRun) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
+  if (friction_ && stuck_) {
     const double drive = driving_torque_nm();
     if (std::fabs(drive) <= m_.stiction_nm) {
-      x_(0) = stuck_a_ * x_(0) + stuck_b_ * v;  // w and theta stay exactly where they are
+      x_(0) = run_stuck_current(++k_);  // w and theta stay exactly where they are
       return;
     }
     stuck_ = false;  // breakaway, in the direction of the driving torque
-    dir = drive > 0 ? 1.0 : -1.0;
-  } else {
-    dir = x_(1) > 0 ? 1.0 : -1.0;
+    anchor(v, drive > 0 ? 1.0 : -1.0);
   }
-  // Coulomb friction opposes the motion for the whole step.
-  x_ = ad_ * x_ + bd_ * Eigen::Vector2d(v, tau_load_ + dir * m_.coulomb_nm);
+  // Coulomb friction opposes the motion for the whole step (the run's input).
+  x_ = run_state(++k_);
   // Friction can stop the shaft, never reverse it: a step that would cross
   // zero speed ends at rest, and the stiction test decides what comes next.
-  if (x_(1) * dir <= 0) {
+  if (friction_ && x_(1) * dir_ <= 0) {
     x_(1) = 0;
     stuck_ = true;
+    anchor(v, 0);
   }
+}
+
+uint64_t AxisPlant::hold(double v, uint64_t n) {
+  const int64_t count = encoder_count();
+  uint64_t taken = 0;
+  while (taken < n) {
+    if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun) {
+      const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
+      const bool stuck = friction_ && stuck_;
+      const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
+      if (quiet > 0) {
+        k_ += quiet;
+        steps_ += quiet;
+        taken += quiet;
+        if (stuck)
+          x_(0) = run_stuck_current(k_);
+        else
+          x_ = run_state(k_);
+        if (quiet == lim) continue;
+      }
+    }
+    // The step with the event (or the first of a new run): as step() does it.
+    step(v);
+    ++taken;
+    if (encoder_count() != count) return taken;
+  }
+  return taken;
+}
+
+namespace {
+
+int sign_of(double v) {
+  return (v > 0) - (v < 0);
+}
+
+// The last j in [lo, hi] with sign_of(f(j)) == sign_of(f(lo)), for an f whose
+// sign changes at most once on [lo, hi].
+template <typename F>
+uint32_t last_of_sign(uint32_t lo, uint32_t hi, F f) {
+  const int s = sign_of(f(lo));
+  if (s == 0 || sign_of(f(hi)) == s) return hi;
+  while (hi - lo > 1) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    (sign_of(f(mid)) == s ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
+uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
+  const auto event = [&](uint32_t j) {
+    const Eigen::Vector3d x = run_state(j);
+    return (friction_ && x(1) * dir_ <= 0) || count_of(x) != count;
+  };
+  const auto accel = [&](uint32_t j) {
+    const Eigen::Vector3d x = run_state(j);
+    return m_.kt_nm_per_a * x(0) - m_.b_nm_s_per_rad * x(1) - u0_(1);
+  };
+  const auto speed = [&](uint32_t j) { return run_state(j)(1); };
+  // Pieces of the run on which the speed is monotone (split where the
+  // acceleration changes sign) and, without friction, of one sign (split
+  // where it crosses zero): on each the angle is monotone too, so once an
+  // event holds it holds to the piece's end, and a bisection finds the first.
+  const uint32_t lo = k_, hi = k_ + lim;
+  uint32_t cuts[4];
+  int n = 0;
+  const uint32_t turn = last_of_sign(lo, hi, accel);
+  for (const auto& [a, b] : {std::pair{lo, turn}, std::pair{std::min(turn + 1, hi), hi}}) {
+    if (n > 0 && a == cuts[n - 1]) continue;  // no second piece
+    const uint32_t cross = friction_ ? b : last_of_sign(a, b, speed);
+    if (cross != b) cuts[n++] = cross;
+    cuts[n++] = b;
+  }
+  uint32_t from = lo;  // no event here
+  for (int i = 0; i < n; ++i) {
+    uint32_t to = cuts[i];
+    if (to == from) continue;
+    if (event(to)) {
+      while (to - from > 1) {
+        const uint32_t mid = from + (to - from) / 2;
+        (event(mid) ? to : from) = mid;
+      }
+      return to - 1 - lo;
+    }
+    from = to;
+  }
+  return lim;
+}
+
+uint32_t AxisPlant::steps_before_breakaway(uint32_t lim) const {
+  // The stuck current moves monotonically to V/R, the driving torque with
+  // it: once past the breakaway torque, it stays past.
+  const auto breaks = [&](uint32_t j) {
+    return std::fabs(m_.kt_nm_per_a * run_stuck_current(j) - tau_load_) > m_.stiction_nm;
+  };
+  uint32_t from = k_, to = k_ + lim - 1;
+  if (breaks(from)) return 0;
+  if (!breaks(to)) return lim;
+  while (to - from > 1) {
+    const uint32_t mid = from + (to - from) / 2;
+    (breaks(mid) ? to : from) = mid;
+  }
+  return to - k_;
 }
 
 void AxisPlant::set_friction(bool on) {
   friction_ = on;
   stuck_ = on && x_(1) == 0;
+  anchored_ = false;
 }
 
 double AxisPlant::position_m() const {
@@ -100,6 +236,7 @@ void AxisPlant::reset(double position_rad) {
   x_ = Eigen::Vector3d(0, 0, position_rad);
   steps_ = 0;
   stuck_ = friction_;
+  anchored_ = false;
 }
 
 QuadPins quadrature_pins(int64_t count, int encoder_cpr) {

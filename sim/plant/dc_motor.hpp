@@ -10,12 +10,20 @@
 // exactly 0 while the driving torque stays within the breakaway torque.
 // docs/plant.md derives the model and explains the stiction logic.
 //
-// step() is cheap (fixed-size 3x3, no allocation): the co-simulation calls it
-// once per plant step (1 us) per axis.
+// The state is kept as runs: from an anchor (the state where the input last
+// changed, or friction started or stopped the shaft) the state k steps on is
+// Ad^k x0 + (Ad^(k-1) + ... + I) Bd u, from tables of those powers. So where
+// a caller looks at the state (every step, or once after hold() has taken
+// many) does not change it: the co-simulation's engines, which look at
+// different steps, move the plant identically. hold() takes a whole run of
+// steps at once, stepping one at a time only where friction acts or the
+// encoder count changes (docs/plant.md, "Runs").
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
+#include <vector>
 
 #include "host/machine/machine_config.hpp"
 
@@ -34,6 +42,10 @@ class AxisPlant {
 
   // Advance one dt with the terminal voltage held (ZOH).
   void step(double terminal_volts);
+  // Up to n steps with the terminal voltage held, exactly as n step() calls,
+  // stopping after the first step at whose end the encoder count differs
+  // from the count before the call. Returns the steps taken.
+  uint64_t hold(double terminal_volts, uint64_t n);
   // Friction off = the pure linear model. Turning it on at rest sticks.
   void set_friction(bool on);
   bool friction() const { return friction_; }
@@ -72,7 +84,35 @@ class AxisPlant {
   Eigen::Matrix<double, 3, 2> bd_;
   double stuck_a_, stuck_b_;  // i(k+1) = a i(k) + b V with w = 0: exp(-R dt/L), (1 - a)/R
 
+  // The longest run: a new anchor is taken every kRun steps.
+  static constexpr uint32_t kRun = 2048;
+  // Ad^k and the sum of Ad^j Bd for j < k, k = 0..kRun; the stuck current's
+  // a^k and b (1 + a + .. + a^(k-1)). Shared by copies.
+  struct Powers {
+    std::vector<Eigen::Matrix3d> ad;
+    std::vector<Eigen::Matrix<double, 3, 2>> bd;
+    std::vector<double> stuck_a, stuck_b;
+  };
+  // A new run from the current state with this input; the shaft moves in
+  // direction dir (friction), or is stuck.
+  void anchor(double volts, double dir);
+  Eigen::Vector3d run_state(uint32_t k) const { return pw_->ad[k] * x0_ + pw_->bd[k] * u0_; }
+  double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
+  int64_t count_of(const Eigen::Vector3d& x) const;
+  // Of the next lim steps of the run, how many end without an event (a
+  // count other than `count`, or friction stopping the shaft); how many
+  // stuck steps come before the breakaway.
+  uint32_t steps_before_event(uint32_t lim, int64_t count) const;
+  uint32_t steps_before_breakaway(uint32_t lim) const;
+
+  std::shared_ptr<const Powers> pw_;
+  bool monotone_runs_ = false;  // real poles: a run's speed has at most one extremum
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d x0_ = Eigen::Vector3d::Zero();  // the run's anchor
+  Eigen::Vector2d u0_ = Eigen::Vector2d::Zero();  // its input [V, tau_ext]
+  double v_ = 0, dir_ = 0;                        // its volts; its direction of motion
+  uint32_t k_ = 0;                                // steps into the run
+  bool anchored_ = false;
   int64_t steps_ = 0;
   bool friction_ = true;
   bool stuck_ = true;
