@@ -140,7 +140,7 @@ class InterpCore {
     const int c_addr = movex_ ? 4 : 5;
     const bool xlock = final_q && xeq_, ylock = final_q && yeq_;
     // The end of the segment, decided at tick step 5 (flags of this tick).
-    const bool fin = st_ == ST_RUN && sq_ == 5 && (!nz_ || (arc && xlock && ylock));
+    const bool fin = ending();
 
     // The operation of this clock.
     Op op;
@@ -317,20 +317,20 @@ class InterpCore {
       pend_ = 0;
       go_ = false;
     }
-    // A whole running tick that changed nothing but the feed phase: the
-    // next ones will not either until an iteration fires (run_quiet).
-    // An iteration fired or moving, too, ends the calm until a whole tick
-    // has shown it back.
+    // Calm: a whole running tick went by with no input, no iteration fired
+    // and none moving. Such a tick writes only what it computes from words
+    // that only an iteration or a load changes (V15, the end and direction
+    // flags, the line's step flags, the carry of step 9), each before it
+    // reads it, besides the feed phase: so the next ticks repeat it, adding
+    // inc to the phase, until one fires (run_quiet).
+    // RunSkipEqualsClocks holds this to clocking every tick.
     const bool strobe = in.wr || in.abort || in.hold || in.clr || in.set || fire || go_;
     if (st_ != ST_RUN || strobe) {
       calm_ = false;
       tick_strobe_ = st_ == ST_RUN;
     }
     if (st_ == ST_RUN && sq_ == 0) {
-      uint32_t key[kCalmWords];
-      calm_key(key);
-      calm_ = !tick_strobe_ && pend_ == 0 && !go_ && calm_seen_ && equal(key, calm_last_);
-      for (int i = 0; i < kCalmWords; ++i) calm_last_[i] = key[i];
+      calm_ = !tick_strobe_ && pend_ == 0 && !go_ && calm_seen_;
       calm_seen_ = true;
       tick_strobe_ = false;
     } else if (st_ != ST_RUN) {
@@ -338,10 +338,37 @@ class InterpCore {
     }
   }
 
-  // Running fast-forward. After a whole tick that changed nothing but the
-  // feed phase, with no iteration pending: each further tick that fires no
-  // iteration only adds inc to the phase (the phase being the one thing such
-  // a tick reads that changes). run_quiet(in) says how many clocks from
+  // Up to n clocks with no input while a segment runs, calm stretches at
+  // once (skip_run), stopping before the clock that would end the segment
+  // (the caller clocks that one, and what follows, itself). The last clock
+  // done never moves the position, so pos() after the call is also what
+  // the last clock showed. Returns the clocks done.
+  uint32_t run_for(uint32_t n) {
+    const InterpIn none{};
+    uint32_t done = 0;
+    while (done < n && st_ == ST_RUN) {
+      if (const uint32_t q = run_quiet(none); q > 0) {
+        const uint32_t m = std::min(q, n - done);
+        skip_run(m);
+        done += m;
+        continue;
+      }
+      if (ending() || (done + 1 == n && sq_ == STEP_MOVE && go_)) break;
+      clock(none);
+      ++done;
+    }
+    return done;
+  }
+  // The current clock ends the running segment (its end test, at tick step 5).
+  bool ending() const {
+    const bool final_q = ncross_ == nq_;
+    return st_ == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
+  }
+
+  // Running fast-forward. After a calm tick (clock() says why), with no
+  // iteration pending: each further tick that fires no iteration only adds
+  // inc to the phase (the phase being the one thing such a tick reads that
+  // changes). run_quiet(in) says how many clocks from
   // here, with these inputs, fire nothing (0: not so); skip_run(n) does
   // n <= that many, the rest of this tick and the tail clock by clock, the
   // whole ticks between by arithmetic.
@@ -468,60 +495,13 @@ class InterpCore {
     }
   }
 
-  // Everything but the feed phase and the read ports, for run_quiet: one
-  // word per register (the segment's words, flags, position, FIFO level).
-  static constexpr int kCalmWords = 16 + 32;
-  void calm_key(uint32_t* k) const {
-    for (int i = 0; i < 16; ++i) k[i] = (i == 11 || i == 12) ? 0 : mem_[i];
-    const uint32_t r[32] = {uint32_t(mem_[12] >> 16),
-                            uint32_t(st_),
-                            uint32_t(sq_),
-                            uint32_t(ic_),
-                            uint32_t(widx_),
-                            uint32_t(ridx_),
-                            uint32_t(rv_),
-                            uint32_t(wi_),
-                            uint32_t(drop_),
-                            uint32_t(pend_),
-                            uint32_t(go_) | uint32_t(fen_) << 1 | uint32_t(carry_) << 2,
-                            uint32_t(type_),
-                            uint32_t(plane_),
-                            uint32_t(nq_),
-                            uint32_t(neg_),
-                            uint32_t(last_) | uint32_t(ccw_) << 1,
-                            uint32_t(nz_) | uint32_t(xz_) << 1 | uint32_t(xn_) << 2 | uint32_t(yz_) << 3 |
-                                uint32_t(yn_) << 4 | uint32_t(xeq_) << 5 | uint32_t(yeq_) << 6,
-                            uint32_t(ncross_),
-                            uint32_t(lmv_),
-                            uint32_t(movex_) | uint32_t(neg_m_) << 1 | uint32_t(outw_) << 2,
-                            uint32_t(pos_[0]),
-                            uint32_t(pos_[1]),
-                            uint32_t(pos_[2]),
-                            uint32_t(underrun_) | uint32_t(ovf_) << 1,
-                            uint32_t(seg_cnt_),
-                            uint32_t(fifo_.count()),
-                            fifo_.rdata(),
-                            uint32_t(ra_addr_),
-                            uint32_t(rb_addr_),
-                            0,
-                            0,
-                            0};
-    for (int i = 0; i < 32; ++i) k[16 + i] = r[i];
-  }
-  static bool equal(const uint32_t* a, const uint32_t* b) {
-    for (int i = 0; i < kCalmWords; ++i)
-      if (a[i] != b[i]) return false;
-    return true;
-  }
-
   SegFifo<FIFO_AW> fifo_;
   uint32_t mem_[16] = {};
   uint32_t ra_ = 0, rb_ = 0;
   uint8_t ra_addr_ = 1, rb_addr_ = 1;  // where ra_ and rb_ were read
-  // run_quiet: the last tick was calm; the key at the start of the last
-  // tick; a strobe came during this tick.
+  // run_quiet: the last tick was calm; a whole tick has run since the
+  // segment started; a strobe came during this tick.
   bool calm_ = false, calm_seen_ = false, tick_strobe_ = false;
-  uint32_t calm_last_[kCalmWords] = {};
   int st_ = ST_IDLE;
   int sq_ = 0;  // PREP step or RUN tick step
   int ic_ = 0;  // init steps done after reset

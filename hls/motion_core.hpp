@@ -199,16 +199,7 @@ class MotionCore {
     // Sub-blocks, each on the values of this clock.
     pid_.clock(pid_in(in, cmd, fb));
 
-    InterpIn ii;
-    ii.wr = in.seg_wr;
-    ii.wdata = in.seg_wdata;
-    ii.abort = in.ip_abort;
-    ii.hold = in.ip_hold;
-    ii.clr = in.ip_clr;
-    ii.set = in.ip_set;
-    for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
-    ii.jog = in.ip_jog;
-    ii.jog_neg = in.ip_jog_neg;
+    const InterpIn ii = interp_in(in);
     // An idle interpolator stands still after two quiet clocks
     // (InterpCore::quiet); from then on its clock is skipped.
     if (in.rst) {
@@ -238,50 +229,46 @@ class MotionCore {
   // decoders settled, interpolator idle, drive value unchanged); skip(in, n)
   // then does them at once (the inputs held are those quiet() was given).
   // The PWM pin ends as the last of those clocks leaves it.
-  bool quiet(const In& in, uint32_t n) const {
-    if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
-    if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
-      const int s = pid_.sweep_clock();
-      for (int a = 0; a < NAXES; ++a)
-        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
-    }
-    if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
-    InterpIn ii;
-    ii.wr = in.seg_wr;
-    ii.abort = in.ip_abort;
-    ii.clr = in.ip_clr;
-    ii.set = in.ip_set;
-    ii.jog = in.ip_jog;
-    ii.hold = in.ip_hold;
-    // The interpolator idle, or running with no iteration due in the n clocks.
-    if (!(ip_.quiet(ii) || ip_.run_quiet(ii) >= n) || !pid_.quiet(pid_in(in, nullptr, nullptr), n))
-      return false;
-    for (int a = 0; a < NAXES; ++a) {
-      if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
-      if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
-    }
-    return true;
+  bool quiet(const In& in, uint32_t n) const { return quiet_but_interp(in, n) && interp_quiet(in, n, false); }
+  // Like quiet(), but the interpolator may run a segment meanwhile, with no
+  // input (its position moving: the PID reads it only at a tick).
+  // skip_busy(n) then does at most n such clocks, stopping before the clock
+  // that would end the segment, and returns how many it did; its last clock
+  // does not move the position (InterpCore::run_for).
+  bool quiet_busy(const In& in, uint32_t n) const {
+    return quiet_but_interp(in, n) && interp_quiet(in, n, true);
   }
+  uint32_t skip_busy(uint32_t n) {
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      n = ip_.run_for(n);
+      if (n == 0) return 0;
+      skip_others(n);
+      return n;
+    }
+    skip(n);
+    return n;
+  }
+
   void skip(uint32_t n) {
-    pid_.skip(n);
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
       ip_.skip_run(n);
     } else if (ip_still_ < 2) {
       ip_.skip(n);
       ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
     }
-    for (int a = 0; a < NAXES; ++a) {
-      dec_[a].skip(n);
-      r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
-    }
-    r_.pcnt = (r_.pcnt + n) & pwm_mask;
+    skip_others(n);
   }
   // The most clocks the sample timer and the sweep allow quiet(): up to the
   // next tick, drive update or done.
   uint32_t quiet_limit() const {
-    uint32_t l = pid_.quiet_limit();
+    uint32_t l = quiet_limit_busy();
     // A running interpolator: up to its next iteration (with no input).
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) l = std::min(l, ip_.run_quiet(InterpIn{}));
+    return l;
+  }
+  // The same, for quiet_busy().
+  uint32_t quiet_limit_busy() const {
+    uint32_t l = pid_.quiet_limit();
     const int s = pid_.sweep_clock();
     if (s != 0)
       for (int a = 0; a < NAXES; ++a)
@@ -309,10 +296,58 @@ class MotionCore {
   bool dir(int a) const { return r_.dir[a]; }
   bool drv_en(int a) const { return r_.drv_en[a]; }
   int16_t drv_cmd(int a) const { return r_.drv_cmd[a]; }
+  int16_t drv_u(int a) const { return r_.drv_u[a]; }
   uint32_t smp_rdata() const { return r_.smp_rdata; }
 
  private:
   static constexpr uint32_t pwm_mask = (1u << PWM_BITS) - 1;
+
+  static InterpIn interp_in(const In& in) {
+    InterpIn ii;
+    ii.wr = in.seg_wr;
+    ii.wdata = in.seg_wdata;
+    ii.abort = in.ip_abort;
+    ii.hold = in.ip_hold;
+    ii.clr = in.ip_clr;
+    ii.set = in.ip_set;
+    for (int a = 0; a < 3; ++a) ii.set_pos[a] = in.ip_set_pos[a];
+    ii.jog = in.ip_jog;
+    ii.jog_neg = in.ip_jog_neg;
+    return ii;
+  }
+  bool interp_quiet(const In& in, uint32_t n, bool busy) const {
+    const InterpIn ii = interp_in(in);
+    // The interpolator idle, or running with no iteration due in the n
+    // clocks (busy: with no input at all).
+    if (ip_.quiet(ii)) return true;
+    if (busy)
+      return ip_.state() == InterpCore<FIFO_AW>::ST_RUN && !ii.wr && !ii.abort && !ii.hold && !ii.clr &&
+             !ii.set && !ii.jog;
+    return ip_.run_quiet(ii) >= n;
+  }
+  bool quiet_but_interp(const In& in, uint32_t n) const {
+    if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
+    if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
+      const int s = pid_.sweep_clock();
+      for (int a = 0; a < NAXES; ++a)
+        if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
+    }
+    if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
+    if (!pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
+    for (int a = 0; a < NAXES; ++a) {
+      if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
+      if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
+    }
+    return true;
+  }
+  void skip_others(uint32_t n) {
+    pid_.skip(n);
+    for (int a = 0; a < NAXES; ++a) {
+      dec_[a].skip(n);
+      r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
+    }
+    r_.pcnt = (r_.pcnt + n) & pwm_mask;
+  }
 
   uint32_t read_bank(uint8_t raddr) const { return uint32_t(bank_[r_.pb][raddr >> 3 & 3][raddr & 7]); }
   struct Regs;

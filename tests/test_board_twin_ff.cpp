@@ -77,6 +77,8 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
       }
       expect_same(ref, fast, clock);
       if (HasFatalFailure()) return;
+      // Every register, the RAM and the read ports as well.
+      ASSERT_TRUE(ref == fast) << "seed " << seed << ", clock " << clock;
       ASSERT_LT(clock, 400'000'000u) << "seed " << seed << ": the segments never finished";
     }
     std::printf("seed %llu: %llu clocks, %llu of them skipped, %d segments\n", (unsigned long long)seed,
@@ -91,10 +93,12 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
 }
 
 // The motion core with a running interpolator: quiet()/skip() against
-// clock(), the PID closing the loop on a still encoder.
+// clock(), the PID closing the loop on a still encoder; and (seeds 23, 24)
+// quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile.
 TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
   using Core = MotionCore<2>;
-  for (uint64_t seed : {21, 22}) {
+  for (uint64_t seed : {21, 22, 23, 24}) {
+    const bool busy = seed >= 23;
     std::mt19937_64 rng(seed);
     SegGen gen(seed);
     gen.min_rate = 0.001;
@@ -141,14 +145,22 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       in.seg_wr = !words.empty() && rng() % 4 == 0 && ref.interp().count() < 300;
       in.seg_wdata = in.seg_wr ? words.front() : 0;
       if (in.seg_wr) words.erase(words.begin());
-      const uint32_t lim = fast.quiet_limit();
+      const uint32_t lim = busy ? fast.quiet_limit_busy() : fast.quiet_limit();
       const uint32_t n = lim == 0 ? 0 : (rng() % 3 ? lim : 1 + uint32_t(rng() % lim));
-      if (n > 0 && fast.quiet(in, n)) {
-        for (uint32_t i = 0; i < n; ++i) ref.clock(in);
-        fast.skip(n);
-        clock += n;
-        skipped += n;
-      } else {
+      uint32_t did = 0;
+      if (n > 0 && (busy ? fast.quiet_busy(in, n) : fast.quiet(in, n))) {
+        if (busy) {
+          did = fast.skip_busy(n);
+          ASSERT_LE(did, n);
+        } else {
+          fast.skip(n);
+          did = n;
+        }
+        for (uint32_t i = 0; i < did; ++i) ref.clock(in);
+        clock += did;
+        skipped += did;
+      }
+      if (did == 0) {
         ref.clock(in);
         fast.clock(in);
         ++clock;
@@ -162,6 +174,8 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       ASSERT_EQ(a.seg_count, b.seg_count) << "clock " << clock;
       ASSERT_EQ(a.ip_seg_cnt, b.ip_seg_cnt) << "clock " << clock;
       ASSERT_EQ(ref.interp().phase(), fast.interp().phase()) << "clock " << clock;
+      // Every register of every block.
+      ASSERT_TRUE(ref == fast) << "seed " << seed << ", clock " << clock;
     }
     ASSERT_FALSE(ref.interp().busy()) << "seed " << seed << ": the segments never finished";
     std::printf("seed %llu: %llu clocks, %llu of them skipped\n", (unsigned long long)seed,

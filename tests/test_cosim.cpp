@@ -46,6 +46,8 @@ TEST(Cosim, TwinAndRtlGiveIdenticalOutputs) {
     EXPECT_EQ(rtl.sample_u[1], twin.sample_u[1]);
     EXPECT_EQ(rtl.pos_m[0], twin.pos_m[0]);
     EXPECT_EQ(rtl.pos_m[1], twin.pos_m[1]);
+    EXPECT_EQ(rtl.cmd_m[0], twin.cmd_m[0]);
+    EXPECT_EQ(rtl.cmd_m[1], twin.cmd_m[1]);
     EXPECT_GT(twin.clocks_skipped, 0u);
   }
 }

@@ -209,7 +209,9 @@ void cosim_command(const CosimCli& c) {
                      {"tracking", r.tracking},
                      {"samples", r.sample_u[0].size()},
                      {"sim_s", r.sim_s},
-                     {"wall_s", r.wall_s}};
+                     {"wall_s", r.wall_s},
+                     {"clocks_cycled", r.clocks_cycled},
+                     {"clocks_skipped", r.clocks_skipped}};
     if (step) {
       j["settling_time_s"] = r.step.settling_s;
       j["overshoot_pct"] = r.step.overshoot_pct;

@@ -1,14 +1,14 @@
 // The FPGA core as the co-simulation sees it: one clock at a time, with the
 // inputs and outputs of rtl/motion_core.v for the two axes of the XY table.
 // Two interchangeable models: the Verilated RTL (RtlCore, sim/rtl_core.hpp)
-// and the hls/ twin (TwinCore), which may also fast-forward quiet clocks.
+// and the hls/ twin (TwinCore), which may also fast-forward quiet clocks
+// (MotionCore::quiet_busy: the interpolator may iterate meanwhile).
 // tests/test_motion_core_rtl.cpp holds the two to each other bit for bit, and
 // the system test holds the two co-simulation paths to each other.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
-#include <optional>
 #include <string>
 
 #include "hls/motion_core.hpp"
@@ -35,38 +35,58 @@ class CoreModel {
   // ip_underrun, tick, done and, per axis, pwm, dir, drv_en, drv_u, drv_cmd
   // and cmd.
   virtual CoreOut cycle(const CoreIn& in) = 0;
-  // n clocks with `in` held, at once, when that changes nothing but counters;
-  // nullopt (and nothing done) otherwise. The RTL never skips.
-  virtual std::optional<Skipped> try_skip(const CoreIn& in, uint32_t n) = 0;
-  // How many of the next clocks (up to limit) try_skip would take with `in`
-  // held (0: none; the RTL never skips).
+  // How many of the next clocks (up to limit) skip() may take with `in`
+  // held: clocks in which nothing changes but counters, the PWM pins and
+  // the position command of a running segment (0: none; the RTL never
+  // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
-  // This clock's outputs and PWM counter, without the edge (the twin).
+  // Up to n of those clocks at once: returns how many it did (it stops
+  // before a segment ends) and the outputs and PWM counter of the first.
+  virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped& /*first*/) { return 0; }
+  // This clock's outputs, without the edge (the twin).
   virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
-  virtual uint32_t pwm_count() const { return 0; }
+  // The position command now (the twin; after a skip).
+  virtual int32_t cmd(int /*a*/) const { return 0; }
 };
 
 class TwinCore final : public CoreModel {
  public:
   CoreOut cycle(const CoreIn& in) override {
-    const CoreOut o = twin_.outputs(in.pid_we);
+    const CoreOut o = used_outputs();
     twin_.clock(in);
     return o;
   }
-  std::optional<Skipped> try_skip(const CoreIn& in, uint32_t n) override {
-    if (!twin_.quiet(in, n)) return std::nullopt;
-    Skipped s{twin_.outputs(in.pid_we), twin_.pwm_count()};
-    twin_.skip(n);
-    return s;
-  }
   uint32_t quiet_clocks(const CoreIn& in, uint32_t limit) const override {
-    const uint32_t n = std::min(limit, twin_.quiet_limit());
-    return n > 0 && twin_.quiet(in, n) ? n : 0;
+    const uint32_t n = std::min(limit, twin_.quiet_limit_busy());
+    return n > 0 && twin_.quiet_busy(in, n) ? n : 0;
   }
-  CoreOut peek(const CoreIn& in) const override { return twin_.outputs(in.pid_we); }
-  uint32_t pwm_count() const override { return twin_.pwm_count(); }
+  uint32_t skip(const CoreIn& /*in*/, uint32_t n, Skipped& first) override {
+    first = Skipped{used_outputs(), twin_.pwm_count()};
+    return twin_.skip_busy(n);
+  }
+  CoreOut peek(const CoreIn& /*in*/) const override { return used_outputs(); }
+  int32_t cmd(int a) const override { return twin_.interp().pos(a); }
 
  private:
+  // The outputs the co-simulation reads after configuring the core (as
+  // the RTL engine fills them), for much less than outputs() gathers.
+  CoreOut used_outputs() const {
+    CoreOut o;
+    o.pid_wready = twin_.pid().wready();
+    o.seg_count = twin_.interp().count();
+    o.ip_underrun = twin_.interp().underrun();
+    o.tick = twin_.pid().tick();
+    o.done = twin_.pid().done();
+    for (int a = 0; a < kCoreAxes; ++a) {
+      o.pwm[a] = twin_.pwm(a);
+      o.dir[a] = twin_.dir(a);
+      o.drv_en[a] = twin_.drv_en(a);
+      o.drv_u[a] = twin_.drv_u(a);
+      o.drv_cmd[a] = twin_.drv_cmd(a);
+      o.cmd[a] = twin_.interp().pos(a);
+    }
+    return o;
+  }
   CoreTwin twin_;
 };
 

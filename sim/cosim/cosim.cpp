@@ -343,11 +343,19 @@ class Machine {
       throw InputError("axes (" + m.source + ")", std::to_string(m.axes.size()), "at least x and y");
     for (int a = 0; a < kCoreAxes; ++a) {
       plant_.emplace_back(m.axes[size_t(a)], m.plant_dt_s);
+      ahead_.push_back(plant_.back());
       gains_[a] = gains_for(m, m.axes[size_t(a)], s_.platform, s_.policy, s_.jitter, s_.feedforward);
     }
     start_step_ = uint64_t(std::llround(1e-3 / m.plant_dt_s));  // the command starts at 1 ms
     end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
     record_every_ = std::max<uint64_t>(1, uint64_t(std::llround(s_.record_dt_s / m.plant_dt_s)));
+    // The trace's length is known: no copies while it grows.
+    const size_t records = size_t((end_step_ - start_step_) / record_every_ + 1);
+    res_.t.reserve(records);
+    for (int a = 0; a < kCoreAxes; ++a) {
+      res_.cmd_m[size_t(a)].reserve(records);
+      res_.pos_m[size_t(a)].reserve(records);
+    }
     if (s_.platform.host) {
       for (int a = 0; a < kCoreAxes; ++a) {
         HostLoopConfig hc;
@@ -393,8 +401,12 @@ class Machine {
   }
 
   void advance_to(uint64_t target) {
-    while (step_ < target)
-      if (!jump(target)) plant_step();
+    while (step_ < target) {
+      if (host())
+        host_step();
+      else if (!jump(target))
+        fpga_step();
+    }
   }
 
   RunResult finish(double wall_s) {
@@ -485,50 +497,57 @@ class Machine {
   }
 
   // The twin engine's event loop: from a step boundary, the whole plant
-  // steps in which the core only counts (no PID tick, drive update or done,
-  // no interpolator iteration, no encoder edge to show) go by with the core
-  // skipped over them at once. The plants still take every step, with the
-  // volts the clock path would sum for it (the drive holds; the PWM pin
-  // follows its counter), so positions and samples are the clock path's
-  // (Cosim.TwinAndRtlGiveIdenticalOutputs). It stops after the step in
-  // which an encoder count changes: that edge is shown clock by clock.
+  // steps in which the core changes nothing the plant or the trace sees
+  // (no PID tick, drive update or done, no segment loaded or ended, no
+  // encoder edge to show; a running segment's position may move) go by at
+  // once: the core skipped over them, each plant held on its drive's volts
+  // over the steps up to the first that changes its count (AxisPlant::hold).
+  // The plants take the steps the clock path takes, with the same volts, so
+  // positions and samples are the clock path's
+  // (Cosim.TwinAndRtlGiveIdenticalOutputs). A jump ends at the next record,
+  // or after the step in which a count changes: that edge is shown clock by
+  // clock; or inside a step, where the core stops before a segment ends.
   bool jump(uint64_t target) {
-    if (host() || s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
+    if (s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
     for (int a = 0; a < kCoreAxes; ++a)
-      if (plant_[size_t(a)].encoder_count() != shown_[a]) return false;
+      if (switching(s_.machine.axes[size_t(a)].drive) || plant_[size_t(a)].encoder_count() != shown_[a])
+        return false;
     uint64_t steps = target - step_;
-    if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
+    if (step_ < start_step_)
+      steps = std::min(steps, start_step_ - step_);
+    else
+      steps = std::min(steps, record_every_ - (step_ - start_step_) % record_every_);
     const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
-    const uint64_t most = q / k_;
+    uint64_t most = q / k_;
     if (most == 0) return false;
     const CoreOut o = core_->peek(in_);
-    const uint32_t p0 = core_->pwm_count(), mask = (1u << CoreTwin::pwm_bits) - 1;
-    uint64_t j = 0;
-    bool edge = false;
-    while (j < most && !edge) {
-      for (int a = 0; a < kCoreAxes; ++a) {
-        const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
-        const double v = switching(d) ? (o.dir[a] ? -d.supply_v : d.supply_v) : drive_volts(d, o.drv_u[a]);
-        const uint32_t duty = CoreTwin::duty(o.drv_u[a]);
-        double sum = 0;
-        for (uint32_t c = 0; c < k_; ++c) {
-          // The pin before clock i's edge: now, then after each skipped edge.
-          const uint64_t i = j * k_ + c;
-          const bool on =
-              !switching(d) || (o.drv_en[a] && (i == 0 ? o.pwm[a] : duty > ((p0 + i - 1) & mask)));
-          sum += on ? v : 0.0;
-        }
-        plant_[size_t(a)].step(sum / k_);
-      }
-      ++step_;
-      ++j;
-      if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
-      for (int a = 0; a < kCoreAxes; ++a) edge = edge || plant_[size_t(a)].encoder_count() != shown_[a];
+    double v[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) v[a] = clock_volts(a, o);
+    // The plants up to the first count change of either.
+    for (int a = 0; a < kCoreAxes; ++a) {
+      ahead_[size_t(a)] = plant_[size_t(a)];
+      ahead_steps_[a] = ahead_[size_t(a)].hold(v[a], most);
+      most = std::min(most, ahead_steps_[a]);
     }
-    const auto sk = core_->try_skip(in_, uint32_t(j * k_));
-    if (!sk) throw std::logic_error("co-simulation: a quiet stretch was not");
-    if (step_ > start_step_) feed_.clocked(sk->first.seg_count, false);
-    res_.clocks_skipped += j * k_;
+    Skipped sk;
+    const uint32_t m = core_->skip(in_, uint32_t(most * k_), sk);
+    if (m == 0) return false;
+    const uint64_t whole = m / k_;
+    for (int a = 0; a < kCoreAxes; ++a) {
+      if (ahead_steps_[a] == whole)
+        plant_[size_t(a)] = ahead_[size_t(a)];
+      else if (plant_[size_t(a)].hold(v[a], whole) != whole)
+        throw std::logic_error("co-simulation: a held plant changed its count early");
+      cmd_now_[a] = core_->cmd(a);
+    }
+    if (step_ >= start_step_) feed_.clocked(sk.first.seg_count, false);
+    res_.clocks_skipped += m;
+    for (uint64_t i = 0; i < whole; ++i) stepped();
+    if (const uint32_t rem = m % k_; rem > 0) {
+      StepVolts before[kCoreAxes];
+      for (int a = 0; a < kCoreAxes; ++a) before[a].add(v[a], rem);
+      fpga_step(rem, before);
+    }
     return true;
   }
 
@@ -556,16 +575,14 @@ class Machine {
     return c;
   }
 
-  void plant_step() {
-    double volts[kCoreAxes];
-    if (host()) {
-      const double t = double(step_) * dt();
-      for (int a = 0; a < kCoreAxes; ++a)
-        volts[a] = drive_volts(dac_[a], int32_t(std::lround(host_[size_t(a)].output_at(t))));
-    } else {
-      fpga_step(volts);
-    }
-    for (int a = 0; a < kCoreAxes; ++a) plant_[size_t(a)].step(volts[a]);
+  void host_step() {
+    const double t = double(step_) * dt();
+    for (int a = 0; a < kCoreAxes; ++a)
+      plant_[size_t(a)].step(drive_volts(dac_[a], int32_t(std::lround(host_[size_t(a)].output_at(t)))));
+    stepped();
+  }
+  // After a plant step: the trace.
+  void stepped() {
     ++step_;
     if (step_ > start_step_ && (step_ - start_step_) % record_every_ == 0) record();
   }
@@ -581,11 +598,43 @@ class Machine {
     in.seg_wdata = in.seg_wr ? feed_.word() : 0;
   }
 
-  void fpga_step(double* volts) {
-    emit_plan();
-    const uint32_t settle = emit_settled_at();
-    double sum[kCoreAxes] = {};
-    uint32_t c = 0;
+  // The volts of one axis over the clocks of a plant step, as runs of
+  // equal values: a drive that held the whole step gives exactly its value
+  // (so that the plant's run goes on, sim/plant/dc_motor.hpp), and the
+  // engines, which see the same values in different stretches, the same
+  // sum.
+  class StepVolts {
+   public:
+    void add(double v, uint32_t clocks) {
+      if (clocks == 0) return;
+      if (runs_ > 0 && v == v_) {
+        n_ += clocks;
+        return;
+      }
+      sum_ += v_ * double(n_);
+      v_ = v;
+      n_ = clocks;
+      ++runs_;
+    }
+    double mean(uint32_t k) const { return runs_ == 1 ? v_ : (sum_ + v_ * double(n_)) / k; }
+
+   private:
+    double sum_ = 0, v_ = 0;
+    uint64_t n_ = 0;
+    int runs_ = 0;
+  };
+
+  // One plant step of the FPGA platform clock by clock, from clock c0 (a
+  // jump that ended inside the step gives the volts of the clocks before),
+  // skipping the quiet stretches of the twin.
+  void fpga_step(uint32_t c0 = 0, const StepVolts* before = nullptr) {
+    StepVolts volts[kCoreAxes];
+    if (before)
+      for (int a = 0; a < kCoreAxes; ++a) volts[a] = before[a];
+    // A jump ends inside a step only where no count changed: no edges.
+    if (c0 == 0) emit_plan();
+    const uint32_t settle = c0 == 0 ? emit_settled_at() : 0;
+    uint32_t c = c0;
     while (c < k_) {
       // The pins change only while edges are due (settle clocks).
       for (int a = 0; a < kCoreAxes && (c == 0 || c <= settle); ++a) {
@@ -599,12 +648,18 @@ class Machine {
       // never skipped (the existing runs' schedule).
       const bool commanding = in_.ip_set != 0 || in_.seg_wr || (step_ == start_step_ && c == 0);
       if (c >= settle && !pending_ && !commanding) {
-        const uint32_t n = k_ - c;
-        if (const auto sk = core_->try_skip(in_, n)) {
-          for (int a = 0; a < kCoreAxes; ++a) sum[a] += skipped_volts(a, sk->first, sk->pwm0, n);
-          res_.clocks_skipped += n;
-          if (step_ >= start_step_) feed_.clocked(sk->first.seg_count, false);
-          break;
+        if (const uint32_t n = core_->quiet_clocks(in_, k_ - c); n > 0) {
+          Skipped sk;
+          if (const uint32_t m = core_->skip(in_, n, sk); m > 0) {
+            for (int a = 0; a < kCoreAxes; ++a) {
+              add_skipped(volts[a], a, sk.first, sk.pwm0, m);
+              cmd_now_[a] = core_->cmd(a);
+            }
+            res_.clocks_skipped += m;
+            if (step_ >= start_step_) feed_.clocked(sk.first.seg_count, false);
+            c += m;
+            continue;
+          }
         }
       }
       const CoreOut o = core_->cycle(in_);
@@ -612,7 +667,7 @@ class Machine {
       if (step_ >= start_step_) feed_.clocked(o.seg_count, in_.seg_wr);
       res_.underrun = res_.underrun || o.ip_underrun;
       for (int a = 0; a < kCoreAxes; ++a) {
-        sum[a] += clock_volts(a, o);
+        volts[a].add(clock_volts(a, o), 1);
         cmd_now_[a] = o.cmd[a];
       }
       if (pending_) {
@@ -630,7 +685,8 @@ class Machine {
     }
     in_.ip_set = 0;
     in_.seg_wr = false;
-    for (int a = 0; a < kCoreAxes; ++a) volts[a] = sum[a] / k_;
+    for (int a = 0; a < kCoreAxes; ++a) plant_[size_t(a)].step(volts[a].mean(k_));
+    stepped();
   }
 
   double clock_volts(int a, const CoreOut& o) {
@@ -648,14 +704,18 @@ class Machine {
     return o.dir[a] ? -d.supply_v : d.supply_v;
   }
   // n quiet clocks: the drive value holds; the PWM pin follows the counter.
-  double skipped_volts(int a, const CoreOut& o, uint32_t p0, uint32_t n) const {
+  void add_skipped(StepVolts& volts, int a, const CoreOut& o, uint32_t p0, uint32_t n) {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
-    if (!switching(d)) return n * drive_volts(d, o.drv_u[a]);
-    if (!o.drv_en[a]) return 0;
+    if (!switching(d)) {
+      volts.add(clock_volts(a, o), n);
+      return;
+    }
+    const double v = o.dir[a] ? -d.supply_v : d.supply_v;
     const uint32_t duty = CoreTwin::duty(o.drv_u[a]), mask = (1u << CoreTwin::pwm_bits) - 1;
-    uint32_t high = o.pwm[a];
-    for (uint32_t k = 1; k < n; ++k) high += duty > ((p0 + k - 1) & mask);
-    return (o.dir[a] ? -d.supply_v : d.supply_v) * high;
+    for (uint32_t k = 0; k < n; ++k) {
+      const bool on = o.drv_en[a] && (k == 0 ? o.pwm[a] : duty > ((p0 + k - 1) & mask));
+      volts.add(on ? v : 0.0, 1);
+    }
   }
 
   // The PC's command: the same interpolator, run on its own, so both
@@ -711,6 +771,8 @@ class Machine {
   SegmentFeed feed_;
   std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
   std::vector<AxisPlant> plant_;
+  std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead
+  uint64_t ahead_steps_[kCoreAxes] = {};
   mc::host::PidGains gains_[kCoreAxes];
   std::vector<HostLoop> host_;
   DriveConfig dac_[kCoreAxes]{};

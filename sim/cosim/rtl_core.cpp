@@ -105,7 +105,6 @@ class RtlCore final : public CoreModel {
     ++clock_;
     return o;
   }
-  std::optional<Skipped> try_skip(const CoreIn&, uint32_t) override { return std::nullopt; }
 
  private:
   std::unique_ptr<VerilatedContext> ctx_;
