@@ -232,6 +232,7 @@ class InterpCore {
     if (st_ == ST_RUN) {
       if (u == 0) fen_ = !in.hold && !in.abort;
       if (u == 0 || u == 9) carry_ = cout;
+      if (u == 9) carry9_ = cout;
       if (u == 1 && fire) pend_ = pend_ == 3 ? 3 : pend_ + 1;
       if (u == 3) xeq_ = zero;
       if (u == 4) yeq_ = zero;
@@ -342,8 +343,11 @@ class InterpCore {
   // once (skip_run), stopping before the clock that would end the segment
   // (the caller clocks that one, and what follows, itself). The last clock
   // done never moves the position, so pos() after the call is also what
-  // the last clock showed. Returns the clocks done.
-  uint32_t run_for(uint32_t n) {
+  // the last clock showed. Returns the clocks done; moved(i) is called
+  // after the i-th clock of the call (from 1) when that clock moved the
+  // position (pos() is then the new one).
+  template <typename Moved>
+  uint32_t run_for(uint32_t n, Moved&& moved) {
     const InterpIn none{};
     uint32_t done = 0;
     while (done < n && st_ == ST_RUN) {
@@ -353,11 +357,16 @@ class InterpCore {
         done += m;
         continue;
       }
-      if (ending() || (done + 1 == n && sq_ == STEP_MOVE && go_)) break;
+      const bool moves = sq_ == STEP_MOVE && go_;
+      if (ending() || (done + 1 == n && moves)) break;
       clock(none);
       ++done;
+      if (moves) moved(done);
     }
     return done;
+  }
+  uint32_t run_for(uint32_t n) {
+    return run_for(n, [](uint32_t) {});
   }
   // The current clock ends the running segment (its end test, at tick step 5).
   bool ending() const {
@@ -370,8 +379,8 @@ class InterpCore {
   // inc to the phase (the phase being the one thing such a tick reads that
   // changes). run_quiet(in) says how many clocks from
   // here, with these inputs, fire nothing (0: not so); skip_run(n) does
-  // n <= that many, the rest of this tick and the tail clock by clock, the
-  // whole ticks between by arithmetic.
+  // n <= that many by arithmetic (calm_advance), whole ticks and parts of
+  // one alike; only a clock between the phase's two adds is clocked.
   uint32_t run_quiet(const InterpIn& in) const {
     // At step 1 this tick's iteration is still to be decided.
     if (!calm_ || st_ != ST_RUN || sq_ == 1 || pend_ != 0 || go_ || in.wr || in.abort || in.hold || in.clr ||
@@ -388,24 +397,19 @@ class InterpCore {
     return head + uint32_t(std::min<uint64_t>(m, uint64_t(1) << 26) * TICK + 1);
   }
   void skip_run(uint32_t n) {
-    for (; n > 0 && sq_ != 0; --n) clock(InterpIn{});
-    const uint32_t m = n / TICK;
-    if (m > 0) {
-      const uint64_t acc = uint64_t(mem_[12] & 0xFFFu) << 32 | mem_[11];
-      const uint64_t inc = uint64_t(mem_[3] & 0xFFFFu) << 32 | mem_[2];
-      const uint64_t now = acc + uint64_t(m) * inc;
-      mem_[11] = uint32_t(now);
-      mem_[12] = (mem_[12] & 0xFFFF0000u) | uint32_t(now >> 32);
-      // The read ports hold what step 0 reads, read after the last write.
-      ra_ = mem_[ra_addr_];
-      rb_ = mem_[rb_addr_];
+    // Between the phase's two adds (steps 0 and 1) the accumulator is split
+    // across V11 and V12 with the carry in flight: that clock is clocked.
+    if (n > 0 && sq_ == 1) {
+      clock(InterpIn{});
+      --n;
     }
-    for (uint32_t i = 0; i < n % TICK; ++i) clock(InterpIn{});
+    const bool split_end = n > 0 && ((sq_ + n) & (TICK - 1)) == 1;
+    calm_advance(split_end ? n - 1 : n);
+    if (split_end) clock(InterpIn{});
   }
 
-  // Fast-forward: idle with less than a segment queued and no input, the
-  // core settles within two clocks and then stands still; skip(n) is n such
-  // clocks.
+  // Fast-forward: idle with less than a segment queued  // Fast-forward: idle with less than a segment queued
+  // and no input, the core settles within two clocks and then stands still; skip(n) is n such clocks.
   bool quiet(const InterpIn& in) const {
     return st_ == ST_IDLE && ic_ == INIT_STEPS && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr &&
            !in.abort && !in.clr && !in.set && !in.jog;
@@ -495,6 +499,38 @@ class InterpCore {
     }
   }
 
+  // n calm clocks at once, from and to a step other than 1 (skip_run).
+  // A calm tick rewrites every word and flag with the value it holds, but
+  // for the phase (steps 0 and 1) and the carry (set at steps 0 and 9): so
+  // the state after them is the phase advanced once per step 0 passed, the
+  // carry of the last setter passed, and the read ports as step s1 - 1
+  // addressed them (no write of a calm clock changes what they read).
+  void calm_advance(uint32_t n) {
+    if (n == 0) return;
+    const uint32_t s0 = uint32_t(sq_), s1 = (s0 + n) & (TICK - 1);
+    // Clocks at step 0 and at step 9 among steps s0 .. s0 + n - 1.
+    const auto passes = [&](uint32_t step) {
+      return (s0 + n + (TICK - 1 - step)) / TICK - (s0 + (TICK - 1 - step)) / TICK;
+    };
+    const uint32_t ticks = passes(0);
+    if (ticks > 0) {
+      const uint64_t acc = uint64_t(mem_[12] & 0xFFFu) << 32 | mem_[11];
+      const uint64_t inc = uint64_t(mem_[3] & 0xFFFFu) << 32 | mem_[2];
+      const uint64_t now = acc + uint64_t(ticks) * inc, before = now - inc;
+      mem_[11] = uint32_t(now);
+      mem_[12] = (mem_[12] & 0xFFFF0000u) | uint32_t(now >> 32);
+      if (s1 >= 2 && s1 <= 9) carry_ = ((before & 0xFFFFFFFFu) + (inc & 0xFFFFFFFFu)) >> 32;
+    }
+    if ((s1 == 0 || s1 > 9) && passes(9) > 0) carry_ = carry9_;
+    sq_ = int(s1 + TICK - 1) & (TICK - 1);
+    const Addr a = next_addr(movex_ ? 4 : 5);
+    sq_ = int(s1);
+    ra_ = mem_[a.a];
+    rb_ = mem_[a.b];
+    ra_addr_ = uint8_t(a.a);
+    rb_addr_ = uint8_t(a.b);
+  }
+
   SegFifo<FIFO_AW> fifo_;
   uint32_t mem_[16] = {};
   uint32_t ra_ = 0, rb_ = 0;
@@ -511,6 +547,9 @@ class InterpCore {
   bool drop_ = false;
   int pend_ = 0;
   bool go_ = false, fen_ = false, carry_ = false;
+  // The carry step 9 set last (not a register of the RTL: carry_ holds it
+  // from step 9 to step 0), for calm_advance().
+  bool carry9_ = false;
   // segment header
   int type_ = 0, plane_ = 0, nq_ = 0, neg_ = 0;
   bool last_ = false, ccw_ = false;

@@ -239,8 +239,13 @@ class MotionCore {
     return quiet_but_interp(in, n) && interp_quiet(in, n, true);
   }
   uint32_t skip_busy(uint32_t n) {
+    return skip_busy(n, [](uint32_t) {});
+  }
+  // moved(i): the i-th clock moved the position (InterpCore::run_for).
+  template <typename Moved>
+  uint32_t skip_busy(uint32_t n, Moved&& moved) {
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
-      n = ip_.run_for(n);
+      n = ip_.run_for(n, moved);
       if (n == 0) return 0;
       skip_others(n);
       return n;

@@ -336,14 +336,25 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
     while (done < n) {
       const int64_t before = held.encoder_count();
       const auto t0 = std::chrono::steady_clock::now();
-      const uint64_t took = held.hold(v, n - done);
+      // Half the holds sample the position along the way, as the
+      // co-simulation's trace does.
+      std::vector<double> samples;
+      const uint64_t first = 1 + rng() % 16, every = 1 + rng() % 12;
+      const bool sampled = rng() % 2 == 0;
+      const uint64_t took =
+          sampled ? held.hold(v, n - done, {first, every, &samples}) : held.hold(v, n - done);
       hold_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       total += took;
       ASSERT_GE(took, 1u);
       ASSERT_LE(took, n - done);
+      size_t sample = 0;
       for (uint64_t k = 0; k < took; ++k) {
         ASSERT_EQ(stepped.encoder_count(), before) << "stretch " << s << ": hold() passed a count change";
         stepped.step(v);
+        if (sampled && k + 1 >= first && (k + 1 - first) % every == 0) {
+          ASSERT_LT(sample, samples.size()) << "stretch " << s << ": a sample missing";
+          ASSERT_EQ(samples[sample++], stepped.position_m()) << "stretch " << s << ", step " << k + 1;
+        }
         ref_step(v);
         // Another count is rounding only where the two angles straddle a
         // count boundary.
@@ -352,6 +363,7 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
             gap > std::fabs(ref(2) - stepped.position_rad()) * rtc)
           ++count_mismatch;
       }
+      ASSERT_EQ(sample, samples.size()) << "stretch " << s << ": samples past the steps taken";
       if (took < n - done) {
         ASSERT_NE(held.encoder_count(), before)
             << "stretch " << s << ": hold() stopped without a count change";

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "hls/motion_core.hpp"
 
@@ -26,6 +27,12 @@ struct Skipped {
   CoreOut first;
   uint32_t pwm0 = 0;
 };
+// A skip's change of the position command: after its clock-th edge (from
+// 1) the command is cmd.
+struct CmdChange {
+  uint32_t clock = 0;
+  int32_t cmd[kCoreAxes] = {};
+};
 
 class CoreModel {
  public:
@@ -41,8 +48,12 @@ class CoreModel {
   // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
   // Up to n of those clocks at once: returns how many it did (it stops
-  // before a segment ends) and the outputs and PWM counter of the first.
-  virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped& /*first*/) { return 0; }
+  // before a segment ends) and the outputs and PWM counter of the first;
+  // appends each change of the position command to *changes.
+  virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped& /*first*/,
+                        std::vector<CmdChange>& /*changes*/) {
+    return 0;
+  }
   // This clock's outputs, without the edge (the twin).
   virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
   // The position command now (the twin; after a skip).
@@ -60,9 +71,14 @@ class TwinCore final : public CoreModel {
     const uint32_t n = std::min(limit, twin_.quiet_limit_busy());
     return n > 0 && twin_.quiet_busy(in, n) ? n : 0;
   }
-  uint32_t skip(const CoreIn& /*in*/, uint32_t n, Skipped& first) override {
+  uint32_t skip(const CoreIn& /*in*/, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
     first = Skipped{used_outputs(), twin_.pwm_count()};
-    return twin_.skip_busy(n);
+    return twin_.skip_busy(n, [&](uint32_t clock) {
+      CmdChange c;
+      c.clock = clock;
+      for (int a = 0; a < kCoreAxes; ++a) c.cmd[a] = twin_.interp().pos(a);
+      changes.push_back(c);
+    });
   }
   CoreOut peek(const CoreIn& /*in*/) const override { return used_outputs(); }
   int32_t cmd(int a) const override { return twin_.interp().pos(a); }

@@ -497,40 +497,47 @@ class Machine {
   }
 
   // The twin engine's event loop: from a step boundary, the whole plant
-  // steps in which the core changes nothing the plant or the trace sees
-  // (no PID tick, drive update or done, no segment loaded or ended, no
-  // encoder edge to show; a running segment's position may move) go by at
-  // once: the core skipped over them, each plant held on its drive's volts
-  // over the steps up to the first that changes its count (AxisPlant::hold).
-  // The plants take the steps the clock path takes, with the same volts, so
-  // positions and samples are the clock path's
-  // (Cosim.TwinAndRtlGiveIdenticalOutputs). A jump ends at the next record,
-  // or after the step in which a count changes: that edge is shown clock by
-  // clock; or inside a step, where the core stops before a segment ends.
+  // steps in which the core changes nothing the plant sees (no PID tick,
+  // drive update or done, no segment loaded or ended, no encoder edge to
+  // show; a running segment's position may move) go by at once: the core
+  // skipped over them, each plant held on its drive's volts over the steps
+  // up to the first that changes its count (AxisPlant::hold). The plants
+  // take the steps the clock path takes, with the same volts, so positions
+  // and samples are the clock path's (Cosim.TwinAndRtlGiveIdenticalOutputs).
+  // The records inside take the plants' positions sampled along the hold
+  // and the command as the core's moves left it at each. A jump ends after
+  // the step in which a count changes (that edge is shown clock by clock),
+  // or inside a step, where the core stops before a segment ends.
   bool jump(uint64_t target) {
     if (s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
     for (int a = 0; a < kCoreAxes; ++a)
       if (switching(s_.machine.axes[size_t(a)].drive) || plant_[size_t(a)].encoder_count() != shown_[a])
         return false;
     uint64_t steps = target - step_;
-    if (step_ < start_step_)
-      steps = std::min(steps, start_step_ - step_);
-    else
-      steps = std::min(steps, record_every_ - (step_ - start_step_) % record_every_);
+    if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
     const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
     uint64_t most = q / k_;
     if (most == 0) return false;
     const CoreOut o = core_->peek(in_);
     double v[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) v[a] = clock_volts(a, o);
-    // The plants up to the first count change of either.
+    // The first record in the stretch, counted in steps from here (none
+    // before the command starts).
+    const uint64_t first =
+        step_ < start_step_ ? most + 1 : record_every_ - (step_ - start_step_) % record_every_;
+    // The plants up to the first count change of either, sampled at the
+    // records.
     for (int a = 0; a < kCoreAxes; ++a) {
       ahead_[size_t(a)] = plant_[size_t(a)];
-      ahead_steps_[a] = ahead_[size_t(a)].hold(v[a], most);
+      sampled_[a].clear();
+      ahead_steps_[a] = ahead_[size_t(a)].hold(v[a], most, {first, record_every_, &sampled_[a]});
       most = std::min(most, ahead_steps_[a]);
     }
     Skipped sk;
-    const uint32_t m = core_->skip(in_, uint32_t(most * k_), sk);
+    int32_t cmd[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) cmd[a] = core_->cmd(a);
+    moves_.clear();
+    const uint32_t m = core_->skip(in_, uint32_t(most * k_), sk, moves_);
     if (m == 0) return false;
     const uint64_t whole = m / k_;
     for (int a = 0; a < kCoreAxes; ++a) {
@@ -538,11 +545,26 @@ class Machine {
         plant_[size_t(a)] = ahead_[size_t(a)];
       else if (plant_[size_t(a)].hold(v[a], whole) != whole)
         throw std::logic_error("co-simulation: a held plant changed its count early");
-      cmd_now_[a] = core_->cmd(a);
     }
+    // The records: a step's command is the one its last clock showed, after
+    // all its edges but the last.
+    size_t mv = 0;
+    for (uint64_t j = first, i = 0; j <= whole; j += record_every_, ++i) {
+      for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
+        for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
+      double pos[kCoreAxes];
+      int64_t count[kCoreAxes];
+      for (int a = 0; a < kCoreAxes; ++a) {
+        pos[a] = sampled_[a][i];
+        // Only the last step of a hold changes a count.
+        count[a] = j == whole ? plant_[size_t(a)].encoder_count() : shown_[a];
+      }
+      record_values(step_ + j, cmd, pos, count);
+    }
+    step_ += whole;
+    for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = core_->cmd(a);
     if (step_ >= start_step_) feed_.clocked(sk.first.seg_count, false);
     res_.clocks_skipped += m;
-    for (uint64_t i = 0; i < whole; ++i) stepped();
     if (const uint32_t rem = m % k_; rem > 0) {
       StepVolts before[kCoreAxes];
       for (int a = 0; a < kCoreAxes; ++a) before[a].add(v[a], rem);
@@ -650,7 +672,10 @@ class Machine {
       if (c >= settle && !pending_ && !commanding) {
         if (const uint32_t n = core_->quiet_clocks(in_, k_ - c); n > 0) {
           Skipped sk;
-          if (const uint32_t m = core_->skip(in_, n, sk); m > 0) {
+          // The command at the step's end is what the skip's last clock
+          // showed: its changes before do not matter here.
+          moves_.clear();
+          if (const uint32_t m = core_->skip(in_, n, sk, moves_); m > 0) {
             for (int a = 0; a < kCoreAxes; ++a) {
               add_skipped(volts[a], a, sk.first, sk.pwm0, m);
               cmd_now_[a] = core_->cmd(a);
@@ -756,12 +781,22 @@ class Machine {
 
   void record() {
     if (host()) generator_to(step_ * k_);
-    const double cpm = counts_per_m(s_.machine.axes[0]);
-    res_.t.push_back(double(step_ - start_step_) * dt());
+    double pos[kCoreAxes];
+    int64_t count[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].push_back(double(cmd_now_[a]) / cpm);
-      res_.pos_m[size_t(a)].push_back(plant_[size_t(a)].position_m());
-      if (s_.scenario.kind == ScenarioKind::Job) enc_[size_t(a)].push_back(plant_[size_t(a)].encoder_count());
+      pos[a] = plant_[size_t(a)].position_m();
+      count[a] = plant_[size_t(a)].encoder_count();
+    }
+    record_values(step_, cmd_now_, pos, count);
+  }
+  // The trace's sample at the end of plant step `step`.
+  void record_values(uint64_t step, const int32_t* cmd, const double* pos_m, const int64_t* count) {
+    const double cpm = counts_per_m(s_.machine.axes[0]);
+    res_.t.push_back(double(step - start_step_) * dt());
+    for (int a = 0; a < kCoreAxes; ++a) {
+      res_.cmd_m[size_t(a)].push_back(double(cmd[a]) / cpm);
+      res_.pos_m[size_t(a)].push_back(pos_m[a]);
+      if (s_.scenario.kind == ScenarioKind::Job) enc_[size_t(a)].push_back(count[a]);
     }
   }
 
@@ -773,6 +808,8 @@ class Machine {
   std::vector<AxisPlant> plant_;
   std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead
   uint64_t ahead_steps_[kCoreAxes] = {};
+  std::vector<double> sampled_[kCoreAxes];  // jump(): their positions at the records
+  std::vector<CmdChange> moves_;            // jump(): the command's changes in the skip
   mc::host::PidGains gains_[kCoreAxes];
   std::vector<HostLoop> host_;
   DriveConfig dac_[kCoreAxes]{};
@@ -808,7 +845,9 @@ SC_MODULE(SystemModel) {
   SystemModel(sc_core::sc_module_name nm,  // NOLINT(performance-unnecessary-value-param)
               Machine & machine, const RunSpec& s)
       : sc_core::sc_module(nm), m(machine), spec(s) {
-    quantum = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 / m.dt())));
+    // Without the PC loop only the monitor looks at the kernel's time: a
+    // longer quantum, so that fewer of the machine's jumps end at one.
+    quantum = std::max<uint64_t>(1, uint64_t(std::llround((m.host() ? 100e-6 : 1e-3) / m.dt())));
     SC_THREAD(machine_proc);
     if (m.host()) SC_THREAD(host_proc);
     if (spec.progress) SC_THREAD(monitor_proc);

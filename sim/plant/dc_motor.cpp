@@ -115,14 +115,24 @@ void AxisPlant::step(double v) {
 }
 
 uint64_t AxisPlant::hold(double v, uint64_t n) {
+  return hold(v, n, Samples{n + 1, 1, nullptr});
+}
+
+uint64_t AxisPlant::hold(double v, uint64_t n, const Samples& samples) {
   const int64_t count = encoder_count();
   uint64_t taken = 0;
+  uint64_t next = samples.out ? samples.first : n + 1;  // the next sampled step of the call
   while (taken < n) {
     if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun) {
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
       const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
       if (quiet > 0) {
+        // Samples inside the quiet stretch, from the run (a stuck shaft
+        // stands where it is).
+        for (; next <= taken + quiet; next += samples.every)
+          samples.out->push_back(stuck ? position_m()
+                                       : run_state(uint32_t(k_ + (next - taken)))(2) * rad_to_m_);
         k_ += quiet;
         steps_ += quiet;
         taken += quiet;
@@ -136,6 +146,10 @@ uint64_t AxisPlant::hold(double v, uint64_t n) {
     // The step with the event (or the first of a new run): as step() does it.
     step(v);
     ++taken;
+    if (next == taken) {
+      samples.out->push_back(position_m());
+      next += samples.every;
+    }
     if (encoder_count() != count) return taken;
   }
   return taken;

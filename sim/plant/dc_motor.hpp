@@ -46,6 +46,15 @@ class AxisPlant {
   // stopping after the first step at whose end the encoder count differs
   // from the count before the call. Returns the steps taken.
   uint64_t hold(double terminal_volts, uint64_t n);
+  // The same, also appending to *out the table position (position_m())
+  // after each of the steps first, first + every, ... of the call (counted
+  // from 1) that it takes: a trace sampled along a held stretch without
+  // ending it.
+  struct Samples {
+    uint64_t first = 1, every = 1;
+    std::vector<double>* out = nullptr;
+  };
+  uint64_t hold(double terminal_volts, uint64_t n, const Samples& samples);
   // Friction off = the pure linear model. Turning it on at rest sticks.
   void set_friction(bool on);
   bool friction() const { return friction_; }
