@@ -29,6 +29,7 @@ namespace mc {
 
 // Inputs of one clock. Per-axis pins are bit masks, bit a for axis a.
 struct McBoardIn {
+  bool operator==(const McBoardIn&) const = default;
   bool rst = false;
   bool rx = true;                           // synchronized
   uint8_t enc_a = 0, enc_b = 0, enc_z = 0;  // asynchronous: the decoders synchronize them
@@ -80,7 +81,10 @@ class McBoard {
   // ---- one clock edge ------------------------------------------------------
   void clock(const McBoardIn& in) {
     Wires& w = w_;
-    wires(in, w);
+    // quiet() just computed them from this state and these inputs.
+    if (!wired_ || !(in == wired_in_)) wires(in, w);
+    wired_ = false;
+    walk_ = 0;
     const uint8_t tx_byte = u_ltx.byte_o;
     const bool tx_valid = u_ltx.valid_o;
     u_urx.clock(in.rst, in.rx);
@@ -117,18 +121,60 @@ class McBoard {
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
     Wires& w = w_;
     wires(in, w);
+    wired_ = true;
+    wired_in_ = in;
     n = u_lrx.quiet(w.lrx, n);
-    if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet(w.regs)) return 0;
+    // The walker reading a sample with no telemetry to send: it may run
+    // inside the stretch (walk_clocks).
+    walk_ = 0;
+    const bool walking = !u_regs.quiet(w.regs);
+    if (n == 0 || !u_ltx.quiet(w.ltx) ||
+        (walking && !(u_regs.quiet_but_walk(w.regs) && u_regs.walk_silent())))
+      return 0;
     n = u_safety.quiet(w.safety, n);
     const uint32_t t = u_core.quiet_limit();  // no tick, drive update or done in the n clocks
     if (t < n) n = t;
-    if (n == 0 || !u_core.quiet(core_in_, n)) return 0;
+    if (n == 0 || !(walking ? u_core.quiet_but_port(core_in_, n) : u_core.quiet(core_in_, n))) return 0;
     if (!u_io.quiet(w.io) || !u_step.quiet(w.step)) return 0;
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;
+    if (walking && (walk_ = walk_clocks(w.regs)) == 0) return 0;
     return n;
   }
+  // A walk on its own: the register file clocked with the other blocks
+  // quiet, the sample RAM's read port following its address as
+  // motion_core's does. The clocks until the walker is idle and its read
+  // pipeline settled; 0 when the walk would show outside the register file
+  // (a following-error trip, a telemetry word or frame), which a skip must
+  // not hide.
+  uint32_t walk_clocks(const typename Regs::In& in) const {
+    Regs regs = u_regs;
+    typename Regs::In ri = in;
+    uint32_t port = u_core.smp_rdata();
+    for (uint32_t c = 1; c <= kMaxWalk; ++c) {
+      ri.smp_rdata = port;
+      const uint8_t raddr = regs.smp_raddr_o();
+      regs.clock(ri);
+      port = u_core.port_word(raddr);
+      if (regs.r.ferr_o != 0 || regs.r.tx_start_o || regs.r.tlm_pend || regs.tx_we_o()) return 0;
+      ri.smp_rdata = port;
+      if (regs.quiet(ri) && port == u_core.port_word(regs.smp_raddr_o())) return c;
+    }
+    return 0;
+  }
   void skip(uint32_t n) {
+    wired_ = false;
+    if (walk_ > 0) {  // quiet() found a walk: the register file and the port it reads, clock by clock
+      typename Regs::In ri = w_.regs;
+      const uint32_t c = n < walk_ ? n : walk_;
+      for (uint32_t i = 0; i < c; ++i) {
+        ri.smp_rdata = u_core.smp_rdata();
+        const uint8_t raddr = u_regs.smp_raddr_o();
+        regs_changed_ = u_regs.clock(ri);
+        u_core.read_port(raddr);
+      }
+      walk_ -= c;
+    }
     u_urx.skip(n);
     u_utx.skip(n);
     u_lrx.skip(n);
@@ -338,6 +384,13 @@ class McBoard {
   Wires w_;
   MotionIn<NAXES> core_in_;
   bool regs_changed_ = true;  // the register file's last clock may have changed its outputs
+  // w_ holds the wires of this state for wired_in_ (quiet() computed them):
+  // a clock() with the same inputs that follows takes them as they are.
+  bool wired_ = false;
+  McBoardIn wired_in_;
+  // The clocks of the walk quiet() found that skip() has still to do.
+  static constexpr uint32_t kMaxWalk = 64;
+  uint32_t walk_ = 0;
 };
 
 }  // namespace mc

@@ -589,7 +589,11 @@ class McRegs {
   // busy with one), no counter pending, the walker and every pipeline
   // settled, no strobe. The register file has no free-running counter, so
   // any number of such clocks changes nothing.
-  bool quiet(const In& in) const {
+  bool quiet(const In& in) const { return quiet_but_walk(in) && walk_settled(in); }
+  // Everything of quiet() but the walker and the read pipeline it drives
+  // (the board's fast-forward runs a walk without telemetry on its own:
+  // McBoard::walk_clocks).
+  bool quiet_but_walk(const In& in) const {
     if (in.rst || in.frame || in.crc_err || in.framing || in.junk || in.done) return false;
     if (r.xs != X_IDLE || r.tx_start_o) return false;
     if (!in.tx_busy && (r.rep_pend || r.rep_sending || r.tlm_pend || r.tlm_sending)) return false;
@@ -600,13 +604,20 @@ class McRegs {
         r.enc_idx_arm_o != 0 || r.enc_idx_disarm_o != 0 || r.enc_err_clr_o != 0 || r.drv_ovr_we_o != 0 ||
         r.ferr_o != 0)
       return false;
-    if (r.set_t1 != r.set_n || r.set_t2 != r.set_n) return false;
+    return r.set_t1 == r.set_n && r.set_t2 == r.set_n;
+  }
+  // The walker idle and the read pipeline settled on the register address.
+  bool walk_settled(const In& in) const {
     if (r.w_act || r.done_d != 0 || r.w_end || r.w_tlm_busy) return false;
     const uint8_t t = uint8_t(uint32_t(walk_last()) << 4 | uint32_t(r.w_hdr) << 3 | r.w_k);
     if (r.t1 != t || r.t2 != t || r.ta1 != r.w_a || r.ta2 != r.w_a) return false;
     return r.ra == r.addr && r.sa == sidx(r.addr) && r.q == live(r.addr, in) && r.q_smp == ra_smp(r.addr) &&
            r.sq == shadow[r.sa];
   }
+
+  // This walk sends no telemetry: none due for the sample it will read,
+  // and none being written.
+  bool walk_silent() const { return !r.w_tlm && !r.w_tlm_busy && !(r.done_d != 0 && r.tlm_due_l); }
 
   // ---- combinational helpers (the RTL's wires) ---------------------------
   // Shadow RAM index of a register address: {per-axis, low seven bits}.

@@ -230,6 +230,14 @@ class MotionCore {
   // then does them at once (the inputs held are those quiet() was given).
   // The PWM pin ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const { return quiet_but_interp(in, n) && interp_quiet(in, n, false); }
+  // quiet() but for the sample RAM's read port, whose address the register
+  // file's walker moves meanwhile (McBoard::walk_clocks): read_port(raddr) is
+  // that port's clock, the rest skipped as skip() does.
+  bool quiet_but_port(const In& in, uint32_t n) const {
+    return quiet_but_interp(in, n, false) && interp_quiet(in, n, false);
+  }
+  void read_port(uint8_t raddr) { r_.smp_rdata = read_bank(raddr); }
+  uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
   // Like quiet(), but the interpolator may run a segment meanwhile, with no
   // input (its position moving: the PID reads it only at a tick).
   // skip_busy(n) then does at most n such clocks, stopping before the clock
@@ -330,14 +338,14 @@ class MotionCore {
              !ii.set && !ii.jog;
     return ip_.run_quiet(ii) >= n;
   }
-  bool quiet_but_interp(const In& in, uint32_t n) const {
+  bool quiet_but_interp(const In& in, uint32_t n, bool port = true) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
     if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
       const int s = pid_.sweep_clock();
       for (int a = 0; a < NAXES; ++a)
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
     }
-    if (r_.smp_rdata != read_bank(in.smp_raddr)) return false;
+    if (port && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     if (!pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
     for (int a = 0; a < NAXES; ++a) {
       if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
