@@ -348,6 +348,26 @@ class InterpCore {
   // position (pos() is then the new one).
   template <typename Moved>
   uint32_t run_for(uint32_t n, Moved&& moved) {
+    return run(n, moved, true);
+  }
+  uint32_t run_for(uint32_t n) {
+    return run_for(n, [](uint32_t) {});
+  }
+  // Up to n clocks with no input while a segment runs, stopping only before
+  // the clock that would end it (the last clock may move the position).
+  uint32_t run_to_end(uint32_t n) {
+    return run(
+        n, [](uint32_t) {}, false);
+  }
+  // The current clock ends the running segment (its end test, at tick step 5).
+  bool ending() const {
+    const bool final_q = ncross_ == nq_;
+    return st_ == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
+  }
+
+ private:
+  template <typename Moved>
+  uint32_t run(uint32_t n, Moved&& moved, bool still_last) {
     const InterpIn none{};
     uint32_t done = 0;
     while (done < n && st_ == ST_RUN) {
@@ -358,22 +378,15 @@ class InterpCore {
         continue;
       }
       const bool moves = sq_ == STEP_MOVE && go_;
-      if (ending() || (done + 1 == n && moves)) break;
+      if (ending() || (still_last && done + 1 == n && moves)) break;
       clock(none);
       ++done;
       if (moves) moved(done);
     }
     return done;
   }
-  uint32_t run_for(uint32_t n) {
-    return run_for(n, [](uint32_t) {});
-  }
-  // The current clock ends the running segment (its end test, at tick step 5).
-  bool ending() const {
-    const bool final_q = ncross_ == nq_;
-    return st_ == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
-  }
 
+ public:
   // Running fast-forward. After a calm tick (clock() says why), with no
   // iteration pending: each further tick that fires no iteration only adds
   // inc to the phase (the phase being the one thing such a tick reads that

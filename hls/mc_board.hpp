@@ -85,6 +85,7 @@ class McBoard {
     if (!wired_ || !(in == wired_in_)) wires(in, w);
     wired_ = false;
     walk_ = 0;
+    busy_ = false;
     const uint8_t tx_byte = u_ltx.byte_o;
     const bool tx_valid = u_ltx.valid_o;
     u_urx.clock(in.rst, in.rx);
@@ -114,6 +115,8 @@ class McBoard {
   // fault. skip(n) then does n of them at once, leaving exactly the state of
   // n clocks; 0 means clock() this one.
   uint32_t quiet(const McBoardIn& in, uint32_t limit) {
+    walk_ = 0;
+    busy_ = false;
     if (limit == 0 || in.rst) return 0;
     uint32_t n = u_urx.quiet(in.rx, limit);
     if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
@@ -126,19 +129,28 @@ class McBoard {
     n = u_lrx.quiet(w.lrx, n);
     // The walker reading a sample with no telemetry to send: it may run
     // inside the stretch (walk_clocks).
-    walk_ = 0;
     const bool walking = !u_regs.quiet(w.regs);
     if (n == 0 || !u_ltx.quiet(w.ltx) ||
         (walking && !(u_regs.quiet_but_walk(w.regs) && u_regs.walk_silent())))
       return 0;
     n = u_safety.quiet(w.safety, n);
-    const uint32_t t = u_core.quiet_limit();  // no tick, drive update or done in the n clocks
+    // A running segment may go on inside the stretch while its command
+    // reaches nothing but the PID's next tick: no step generator armed.
+    busy_ = u_core.interp().state() == Core::Interp::ST_RUN && u_step.following(w.step);
+    // No tick, drive update or done in the n clocks (nor, unless busy, an
+    // iteration).
+    const uint32_t t = busy_ ? u_core.quiet_limit_busy() : u_core.quiet_limit();
     if (t < n) n = t;
-    if (n == 0 || !(walking ? u_core.quiet_but_port(core_in_, n) : u_core.quiet(core_in_, n))) return 0;
+    if (n == 0 || !u_core.quiet_as(core_in_, n, !walking, busy_)) return 0;
     if (!u_io.quiet(w.io) || !u_step.quiet(w.step)) return 0;
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;
     if (walking && (walk_ = walk_clocks(w.regs)) == 0) return 0;
+    if (busy_) {
+      // Up to the clock that would end the segment (a copy finds it).
+      typename Core::Interp ip = u_core.interp();
+      n = ip.run_to_end(n);
+    }
     return n;
   }
   // A walk on its own: the register file clocked with the other blocks
@@ -180,7 +192,18 @@ class McBoard {
     u_lrx.skip(n);
     u_ltx.skip(n);
     u_safety.skip(n);
-    u_core.skip(n);
+    if (busy_) {
+      // quiet() found at least n clocks before the segment's end. The step
+      // generators take the command their last clock showed: after all
+      // edges but the last.
+      if (n > 1) u_core.skip_to_end(n - 1);
+      uint8_t cmd = 0;
+      for (int a = 0; a < NAXES; ++a) cmd = uint8_t(cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
+      u_core.skip_to_end(1);
+      u_step.follow(cmd);
+    } else {
+      u_core.skip(n);
+    }
     u_io.skip(n, u_safety.armed_o);
     if constexpr (HANDWHEEL) u_hw.skip(n);
     hb = (hb + n) & ((1u << HB_W) - 1);
@@ -391,6 +414,8 @@ class McBoard {
   // The clocks of the walk quiet() found that skip() has still to do.
   static constexpr uint32_t kMaxWalk = 64;
   uint32_t walk_ = 0;
+  // quiet() let the running segment into the stretch.
+  bool busy_ = false;
 };
 
 }  // namespace mc

@@ -104,6 +104,16 @@ class McStep {
     return true;
   }
 
+  // Every built generator disabled (no stepper axis armed): a command
+  // that moves changes nothing but what each remembers of it (follow()).
+  bool following(const McStepIn& in) const { return !in.allow || (stepper & BUILT) == 0; }
+  // After clocks in which following() held: the command as the last of
+  // them showed it.
+  void follow(uint8_t cmd) {
+    for (int a = 0; a < NAXES; ++a)
+      if (BUILT >> a & 1) u_gen[a].last = uint8_t(cmd >> (2 * a) & 3);
+  }
+
   void clock(const McStepIn& in) {
     namespace bb = board::bits;
     // The generators' inputs take this clock's STEP_CFG (registers).

@@ -230,11 +230,12 @@ class MotionCore {
   // then does them at once (the inputs held are those quiet() was given).
   // The PWM pin ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const { return quiet_but_interp(in, n) && interp_quiet(in, n, false); }
-  // quiet() but for the sample RAM's read port, whose address the register
-  // file's walker moves meanwhile (McBoard::walk_clocks): read_port(raddr) is
-  // that port's clock, the rest skipped as skip() does.
-  bool quiet_but_port(const In& in, uint32_t n) const {
-    return quiet_but_interp(in, n, false) && interp_quiet(in, n, false);
+  // quiet() with what the board's fast-forward lets move meanwhile: the
+  // sample RAM's read port (port false), whose address the register file's
+  // walker moves (McBoard::walk_clocks; read_port(raddr) is that port's
+  // clock); a running segment (busy: as quiet_busy()).
+  bool quiet_as(const In& in, uint32_t n, bool port, bool busy) const {
+    return quiet_but_interp(in, n, port) && interp_quiet(in, n, busy);
   }
   void read_port(uint8_t raddr) { r_.smp_rdata = read_bank(raddr); }
   uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
@@ -260,6 +261,17 @@ class MotionCore {
     }
     skip(n);
     return n;
+  }
+
+  // n clocks in which quiet_as(in, n, .., true) held and the running
+  // segment does not end (InterpCore::run_to_end on a copy said so).
+  void skip_to_end(uint32_t n) {
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      ip_.run_to_end(n);
+      skip_others(n);
+    } else {
+      skip(n);
+    }
   }
 
   void skip(uint32_t n) {
@@ -301,7 +313,8 @@ class MotionCore {
   }
 
   const Pid& pid() const { return pid_; }
-  const InterpCore<FIFO_AW>& interp() const { return ip_; }
+  using Interp = InterpCore<FIFO_AW>;
+  const Interp& interp() const { return ip_; }
   const Decoder& decoder(int a) const { return dec_[a]; }
   // Single outputs of the current clock, for users that need a few of them
   // every clock (outputs() gathers all).
