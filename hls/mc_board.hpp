@@ -85,7 +85,7 @@ class McBoard {
     if (!wired_ || !(in == wired_in_)) wires(in, w);
     wired_ = false;
     walk_ = 0;
-    busy_ = false;
+    let_ = {};
     const uint8_t tx_byte = u_ltx.byte_o;
     const bool tx_valid = u_ltx.valid_o;
     u_urx.clock(in.rst, in.rx);
@@ -116,7 +116,7 @@ class McBoard {
   // n clocks; 0 means clock() this one.
   uint32_t quiet(const McBoardIn& in, uint32_t limit) {
     walk_ = 0;
-    busy_ = false;
+    let_ = {};
     if (limit == 0 || in.rst) return 0;
     uint32_t n = u_urx.quiet(in.rx, limit);
     if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
@@ -136,17 +136,18 @@ class McBoard {
     n = u_safety.quiet(w.safety, n);
     // A running segment may go on inside the stretch while its command
     // reaches nothing but the PID's next tick: no step generator armed.
-    busy_ = u_core.interp().state() == Core::Interp::ST_RUN && u_step.following(w.step);
+    const bool busy = u_core.interp().state() == Core::Interp::ST_RUN && u_step.following(w.step);
     // No tick, drive update or done in the n clocks (nor, unless busy, an
     // iteration).
-    const uint32_t t = busy_ ? u_core.quiet_limit_busy() : u_core.quiet_limit();
+    const uint32_t t = busy ? u_core.quiet_limit_busy() : u_core.quiet_limit();
     if (t < n) n = t;
-    if (n == 0 || !u_core.quiet_as(core_in_, n, !walking, busy_)) return 0;
+    let_ = typename Core::Let{walking, busy};
+    if (n == 0 || !u_core.quiet_as(core_in_, n, let_)) return 0;
     if (!u_io.quiet(w.io) || !u_step.quiet(w.step)) return 0;
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;
     if (walking && (walk_ = walk_clocks(w.regs)) == 0) return 0;
-    if (busy_) {
+    if (busy) {
       // Up to the clock that would end the segment (a copy finds it).
       typename Core::Interp ip = u_core.interp();
       n = ip.run_to_end(n);
@@ -159,15 +160,17 @@ class McBoard {
   // pipeline settled; 0 when the walk would show outside the register file
   // (a following-error trip, a telemetry word or frame), which a skip must
   // not hide.
-  uint32_t walk_clocks(const typename Regs::In& in) const {
-    Regs regs = u_regs;
+  // The register file at the walk's end is kept for skip() (walked_).
+  uint32_t walk_clocks(const typename Regs::In& in) {
+    Regs& regs = walked_;
+    regs = u_regs;
     typename Regs::In ri = in;
     uint32_t port = u_core.smp_rdata();
     for (uint32_t c = 1; c <= kMaxWalk; ++c) {
       ri.smp_rdata = port;
-      const uint8_t raddr = regs.smp_raddr_o();
-      regs.clock(ri);
-      port = u_core.port_word(raddr);
+      walked_raddr_ = regs.smp_raddr_o();
+      walked_changed_ = regs.clock(ri);
+      port = u_core.port_word(walked_raddr_);
       if (regs.r.ferr_o != 0 || regs.r.tx_start_o || regs.r.tlm_pend || regs.tx_we_o()) return 0;
       ri.smp_rdata = port;
       if (regs.quiet(ri) && port == u_core.port_word(regs.smp_raddr_o())) return c;
@@ -176,33 +179,37 @@ class McBoard {
   }
   void skip(uint32_t n) {
     wired_ = false;
-    if (walk_ > 0) {  // quiet() found a walk: the register file and the port it reads, clock by clock
+    if (walk_ > 0 && n >= walk_) {  // quiet() found a walk that ends in the stretch: its end
+      u_regs = walked_;
+      u_core.read_port(walked_raddr_);
+      regs_changed_ = walked_changed_;
+      walk_ = 0;
+    } else if (walk_ > 0) {  // part of it: the register file and the port it reads, clock by clock
       typename Regs::In ri = w_.regs;
-      const uint32_t c = n < walk_ ? n : walk_;
-      for (uint32_t i = 0; i < c; ++i) {
+      for (uint32_t i = 0; i < n; ++i) {
         ri.smp_rdata = u_core.smp_rdata();
         const uint8_t raddr = u_regs.smp_raddr_o();
         regs_changed_ = u_regs.clock(ri);
         u_core.read_port(raddr);
       }
-      walk_ -= c;
+      walk_ -= n;
     }
     u_urx.skip(n);
     u_utx.skip(n);
     u_lrx.skip(n);
     u_ltx.skip(n);
     u_safety.skip(n);
-    if (busy_) {
+    if (let_.busy) {
       // quiet() found at least n clocks before the segment's end. The step
       // generators take the command their last clock showed: after all
       // edges but the last.
-      if (n > 1) u_core.skip_to_end(n - 1);
+      if (n > 1) u_core.skip_as(n - 1, let_);
       uint8_t cmd = 0;
       for (int a = 0; a < NAXES; ++a) cmd = uint8_t(cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
-      u_core.skip_to_end(1);
+      u_core.skip_as(1, let_);
       u_step.follow(cmd);
     } else {
-      u_core.skip(n);
+      u_core.skip_as(n, let_);
     }
     u_io.skip(n, u_safety.armed_o);
     if constexpr (HANDWHEEL) u_hw.skip(n);
@@ -414,8 +421,14 @@ class McBoard {
   // The clocks of the walk quiet() found that skip() has still to do.
   static constexpr uint32_t kMaxWalk = 64;
   uint32_t walk_ = 0;
-  // quiet() let the running segment into the stretch.
-  bool busy_ = false;
+  // The walk's end as walk_clocks() found it: the register file, the
+  // port's address in its last clock, whether that clock changed outputs.
+  Regs walked_;
+  uint8_t walked_raddr_ = 0;
+  bool walked_changed_ = false;
+  // What quiet() let move in the stretch: the walk's read port, the
+  // running segment.
+  typename Core::Let let_;
 };
 
 }  // namespace mc

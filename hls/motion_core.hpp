@@ -226,16 +226,33 @@ class MotionCore {
 
   // Fast-forward for long simulations: true when n clocks with these inputs
   // would change nothing but counters (no tick, drive update or done due,
-  // decoders settled, interpolator idle, drive value unchanged); skip(in, n)
+  // decoders settled, interpolator idle, drive value unchanged); skip(n)
   // then does them at once (the inputs held are those quiet() was given).
   // The PWM pin ends as the last of those clocks leaves it.
-  bool quiet(const In& in, uint32_t n) const { return quiet_but_interp(in, n) && interp_quiet(in, n, false); }
-  // quiet() with what the board's fast-forward lets move meanwhile: the
-  // sample RAM's read port (port false), whose address the register file's
-  // walker moves (McBoard::walk_clocks; read_port(raddr) is that port's
-  // clock); a running segment (busy: as quiet_busy()).
-  bool quiet_as(const In& in, uint32_t n, bool port, bool busy) const {
-    return quiet_but_interp(in, n, port) && interp_quiet(in, n, busy);
+  bool quiet(const In& in, uint32_t n) const { return quiet_as(in, n, Let{}); }
+  // What quiet_as() may also let change in the n clocks, neither of which
+  // the core shows before its next tick, drive update or done
+  // (quiet_limit_busy() bounds n to those):
+  struct Let {
+    // The sample RAM's read port, whose address the board's register file
+    // walks after a sample (McBoard::walk_clocks; read_port(raddr) is the
+    // port's clock).
+    bool port = false;
+    // A running segment: its position moves, which the PID reads at a tick.
+    bool busy = false;
+  };
+  bool quiet_as(const In& in, uint32_t n, Let let) const {
+    return quiet_but_interp(in, n, let) && interp_quiet(in, n, let.busy);
+  }
+  // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
+  // the clock that ends the running segment (InterpCore::run_to_end on a
+  // copy tells how far that is).
+  void skip_as(uint32_t n, Let let) {
+    if (let.busy && ip_.state() == InterpCore<FIFO_AW>::ST_RUN)
+      ip_.run_to_end(n);
+    else
+      skip_interp(n);
+    skip_others(n);
   }
   void read_port(uint8_t raddr) { r_.smp_rdata = read_bank(raddr); }
   uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
@@ -243,44 +260,26 @@ class MotionCore {
   // input (its position moving: the PID reads it only at a tick).
   // skip_busy(n) then does at most n such clocks, stopping before the clock
   // that would end the segment, and returns how many it did; its last clock
-  // does not move the position (InterpCore::run_for).
-  bool quiet_busy(const In& in, uint32_t n) const {
-    return quiet_but_interp(in, n) && interp_quiet(in, n, true);
-  }
-  uint32_t skip_busy(uint32_t n) {
-    return skip_busy(n, [](uint32_t) {});
-  }
-  // moved(i): the i-th clock moved the position (InterpCore::run_for).
+  // does not move the position (InterpCore::run_for); moved(i): the i-th
+  // clock moved it.
+  bool quiet_busy(const In& in, uint32_t n) const { return quiet_as(in, n, Let{false, true}); }
   template <typename Moved>
   uint32_t skip_busy(uint32_t n, Moved&& moved) {
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
       n = ip_.run_for(n, moved);
       if (n == 0) return 0;
-      skip_others(n);
-      return n;
+    } else {
+      skip_interp(n);
     }
-    skip(n);
+    skip_others(n);
     return n;
   }
-
-  // n clocks in which quiet_as(in, n, .., true) held and the running
-  // segment does not end (InterpCore::run_to_end on a copy said so).
-  void skip_to_end(uint32_t n) {
-    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
-      ip_.run_to_end(n);
-      skip_others(n);
-    } else {
-      skip(n);
-    }
+  uint32_t skip_busy(uint32_t n) {
+    return skip_busy(n, [](uint32_t) {});
   }
 
   void skip(uint32_t n) {
-    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
-      ip_.skip_run(n);
-    } else if (ip_still_ < 2) {
-      ip_.skip(n);
-      ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
-    }
+    skip_interp(n);
     skip_others(n);
   }
   // The most clocks the sample timer and the sweep allow quiet(): up to the
@@ -351,20 +350,28 @@ class MotionCore {
              !ii.set && !ii.jog;
     return ip_.run_quiet(ii) >= n;
   }
-  bool quiet_but_interp(const In& in, uint32_t n, bool port = true) const {
+  bool quiet_but_interp(const In& in, uint32_t n, Let let) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
     if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
       const int s = pid_.sweep_clock();
       for (int a = 0; a < NAXES; ++a)
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
     }
-    if (port && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
+    if (!let.port && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     if (!pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
     for (int a = 0; a < NAXES; ++a) {
       if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
       if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
     }
     return true;
+  }
+  void skip_interp(uint32_t n) {
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      ip_.skip_run(n);
+    } else if (ip_still_ < 2) {
+      ip_.skip(n);
+      ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
+    }
   }
   void skip_others(uint32_t n) {
     pid_.skip(n);
