@@ -353,6 +353,22 @@ class InterpCore {
   uint32_t run_for(uint32_t n) {
     return run_for(n, [](uint32_t) {});
   }
+  // At least this many clocks go by before the running segment can end:
+  // it ends at a tick's step 5 once N, counted down by one iteration a
+  // tick at most, is 0, or (an arc) once x and y both equal the end point,
+  // which an iteration brings at most one count nearer. Two ticks of slack
+  // for where in its tick and its pending iterations the engine stands.
+  uint32_t end_bound() const {
+    if (st_ != ST_RUN || !nz_) return 0;
+    uint64_t iters = mem_[1];
+    if (type_ == seg::T_ARC) {
+      const int64_t dx = int64_t(int32_t(mem_[4])) - int32_t(mem_[6]);
+      const int64_t dy = int64_t(int32_t(mem_[5])) - int32_t(mem_[7]);
+      iters = std::min<uint64_t>(iters, uint64_t(dx < 0 ? -dx : dx) + uint64_t(dy < 0 ? -dy : dy));
+    }
+    const uint64_t slack = 2 + 3;  // ticks: the current one and the next, and up to three pending
+    return iters > slack ? uint32_t(std::min<uint64_t>((iters - slack) * TICK, 0xFFFFFFFFu)) : 0;
+  }
   // Up to n clocks with no input while a segment runs, stopping only before
   // the clock that would end it (the last clock may move the position).
   uint32_t run_to_end(uint32_t n) {

@@ -147,7 +147,7 @@ class McBoard {
     if constexpr (HANDWHEEL)
       if (!u_hw.quiet(w.hw)) return 0;
     if (walking && (walk_ = walk_clocks(w.regs)) == 0) return 0;
-    if (busy) {
+    if (busy && u_core.interp().end_bound() < n) {
       // Up to the clock that would end the segment (a copy finds it).
       typename Core::Interp ip = u_core.interp();
       n = ip.run_to_end(n);

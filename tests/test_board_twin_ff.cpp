@@ -92,6 +92,64 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
   EXPECT_GT(all_skipped, all_clocks / 2);
 }
 
+// end_bound() is a lower bound: no running segment ends sooner than it said
+// at any clock of its run. Lines and arcs (full circles among them, whose
+// end point is the start), fast feeds (an iteration every tick, pending
+// ones queued) and slow, with holds; and the bound is not idle: most clocks
+// of a long segment have one of several ticks.
+TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
+  uint64_t clocks_bounded = 0, clocks_run = 0;
+  for (uint64_t seed : {31, 32, 33}) {
+    std::mt19937_64 rng(seed);
+    SegGen gen(seed);
+    gen.min_rate = seed == 33 ? 0.7 : 0.02;
+    gen.max_rate = seed == 33 ? 1.0 : 0.5;
+    gen.max_line = 200;
+    gen.max_radius = 60;
+    Interp ip;
+    ip.reset();
+    Vec3 at{0, 0, 0};
+    std::vector<uint32_t> words;
+    int queued = 0, ended = 0;
+    uint64_t clock = 0, latest = 0;  // latest: the latest clock a bound so far allowed the end at
+    int seg = ip.seg_cnt();
+    while (queued < 80 || ip.busy() || ip.count() > 0 || !words.empty()) {
+      InterpIn in;
+      if (words.empty() && queued < 80 && ip.count() < 3 * seg::SEG_WORDS) {
+        const PlannedSegment p = rng() % 3 ? gen.line(at) : gen.any(at);
+        at = p.end;
+        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+        ++queued;
+      }
+      if (!words.empty() && rng() % 4 == 0) {
+        in.wr = true;
+        in.wdata = words.front();
+        words.erase(words.begin());
+      }
+      in.hold = rng() % 5000 == 0;
+      if (ip.state() == Interp::ST_RUN) {
+        const uint32_t b = ip.end_bound();
+        latest = std::max(latest, clock + b);
+        clocks_bounded += b >= 2 * Interp::TICK;
+        ++clocks_run;
+      }
+      ip.clock(in);
+      ++clock;
+      if (ip.seg_cnt() != seg) {  // a segment ended at this clock
+        ASSERT_GE(clock, latest) << "seed " << seed << ": segment " << ended << " ended before its bound";
+        seg = ip.seg_cnt();
+        latest = 0;
+        ++ended;
+      }
+      ASSERT_LT(clock, 400'000'000u) << "seed " << seed << ": the segments never finished";
+    }
+    EXPECT_GT(ended, 60) << "seed " << seed;
+  }
+  std::printf("%llu of %llu running clocks had a bound of two ticks or more\n",
+              (unsigned long long)clocks_bounded, (unsigned long long)clocks_run);
+  EXPECT_GT(clocks_bounded, clocks_run / 2);
+}
+
 // The motion core with a running interpolator: quiet()/skip() against
 // clock(), the PID closing the loop on a still encoder; and (seeds 23, 24)
 // quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile.
