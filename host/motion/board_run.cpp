@@ -45,8 +45,8 @@ void run_segments(BoardLink& l, const std::vector<PlannedSegment>& segs,
   using Clock = std::chrono::steady_clock;
   const uint32_t segs0 = l.read(br::IP_SEGS) & 0xFFFF;
   const int total = int(segs.size());
-  // The virtual board runs several times slower than real time: the limit
-  // only catches a board that stopped moving.
+  // A virtual board may run slower than real time (a loaded machine, the
+  // RTL engine): the limit only catches a board that stopped moving.
   double board_s = 0;
   for (const PlannedSegment& p : segs) board_s += p.duration;
   const auto deadline = Clock::now() + std::chrono::duration<double>(30 + 100 * board_s);
