@@ -29,6 +29,37 @@ void expect_same(const Interp& a, const Interp& b, uint64_t clock) {
   ASSERT_EQ(a.underrun(), b.underrun()) << "clock " << clock;
 }
 
+// Random segments into an interpolator's queue as room frees, a word now
+// and then rather than every clock, so that the engine runs between.
+struct SegFeeder {
+  // total: segments to queue in all; one_in: a word goes in one clock in
+  // this many; lines: two segments in three are lines (else any kind).
+  SegFeeder(SegGen& g, int total_segments, uint32_t one_in_clocks, bool mostly_lines = false)
+      : gen(g), total(total_segments), one_in(one_in_clocks), lines(mostly_lines) {}
+  SegGen& gen;
+  int total;
+  uint32_t one_in;
+  bool lines;
+  Vec3 at{0, 0, 0};
+  std::vector<uint32_t> words;
+  int queued = 0;
+  // The queue's word for this clock, if one goes in.
+  void feed(std::mt19937_64& rng, int count, InterpIn& in) {
+    if (words.empty() && queued < total && count < 3 * seg::SEG_WORDS) {
+      const PlannedSegment p = lines && rng() % 3 ? gen.line(at) : gen.any(at);
+      at = p.end;
+      for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+      ++queued;
+    }
+    if (!words.empty() && rng() % one_in == 0) {
+      in.wr = true;
+      in.wdata = words.front();
+      words.erase(words.begin());
+    }
+  }
+  bool more() const { return queued < total || !words.empty(); }
+};
+
 TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
   uint64_t all_skipped = 0, all_clocks = 0;
   for (uint64_t seed : {11, 12, 13, 14}) {
@@ -43,24 +74,11 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
     Interp ref, fast;
     ref.reset();
     fast.reset();
-    Vec3 at{0, 0, 0};
-    std::vector<uint32_t> words;
-    int queued = 0;
+    SegFeeder feeder(gen, 60, 8);
     uint64_t clock = 0, skipped = 0;
-    while (queued < 60 || ref.busy() || ref.count() > 0 || !words.empty()) {
+    while (feeder.more() || ref.busy() || ref.count() > 0) {
       InterpIn in;
-      if (words.empty() && queued < 60 && ref.count() < 3 * seg::SEG_WORDS) {
-        const PlannedSegment p = gen.any(at);
-        at = p.end;
-        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
-        ++queued;
-      }
-      // Words go in now and then, not every clock: the engine runs between.
-      if (!words.empty() && rng() % 8 == 0) {
-        in.wr = true;
-        in.wdata = words.front();
-        words.erase(words.begin());
-      }
+      feeder.feed(rng, ref.count(), in);
       in.hold = rng() % 20000 < 3;
       in.clr = rng() % 50000 == 0;
       const uint32_t q = fast.run_quiet(in);
@@ -82,7 +100,7 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
       ASSERT_LT(clock, 400'000'000u) << "seed " << seed << ": the segments never finished";
     }
     std::printf("seed %llu: %llu clocks, %llu of them skipped, %d segments\n", (unsigned long long)seed,
-                (unsigned long long)clock, (unsigned long long)skipped, queued);
+                (unsigned long long)clock, (unsigned long long)skipped, feeder.queued);
     if (seed != 14) {
       EXPECT_GT(skipped, clock / 2) << "seed " << seed;
     }
@@ -108,24 +126,13 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
     gen.max_radius = 60;
     Interp ip;
     ip.reset();
-    Vec3 at{0, 0, 0};
-    std::vector<uint32_t> words;
-    int queued = 0, ended = 0;
+    SegFeeder feeder(gen, 80, 4, true);
+    int ended = 0;
     uint64_t clock = 0, latest = 0;  // latest: the latest clock a bound so far allowed the end at
     int seg = ip.seg_cnt();
-    while (queued < 80 || ip.busy() || ip.count() > 0 || !words.empty()) {
+    while (feeder.more() || ip.busy() || ip.count() > 0) {
       InterpIn in;
-      if (words.empty() && queued < 80 && ip.count() < 3 * seg::SEG_WORDS) {
-        const PlannedSegment p = rng() % 3 ? gen.line(at) : gen.any(at);
-        at = p.end;
-        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
-        ++queued;
-      }
-      if (!words.empty() && rng() % 4 == 0) {
-        in.wr = true;
-        in.wdata = words.front();
-        words.erase(words.begin());
-      }
+      feeder.feed(rng, ip.count(), in);
       in.hold = rng() % 5000 == 0;
       if (ip.state() == Interp::ST_RUN) {
         const uint32_t b = ip.end_bound();
