@@ -381,28 +381,6 @@ class InterpCore {
     return st_ == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
   }
 
- private:
-  template <typename Moved>
-  uint32_t run(uint32_t n, Moved&& moved, bool still_last) {
-    const InterpIn none{};
-    uint32_t done = 0;
-    while (done < n && st_ == ST_RUN) {
-      if (const uint32_t q = run_quiet(none); q > 0) {
-        const uint32_t m = std::min(q, n - done);
-        skip_run(m);
-        done += m;
-        continue;
-      }
-      const bool moves = sq_ == STEP_MOVE && go_;
-      if (ending() || (still_last && done + 1 == n && moves)) break;
-      clock(none);
-      ++done;
-      if (moves) moved(done);
-    }
-    return done;
-  }
-
- public:
   // Running fast-forward. After a calm tick (clock() says why), with no
   // iteration pending: each further tick that fires no iteration only adds
   // inc to the phase (the phase being the one thing such a tick reads that
@@ -437,8 +415,9 @@ class InterpCore {
     if (split_end) clock(InterpIn{});
   }
 
-  // Fast-forward: idle with less than a segment queued  // Fast-forward: idle with less than a segment queued
-  // and no input, the core settles within two clocks and then stands still; skip(n) is n such clocks.
+  // Fast-forward: idle with less than a segment queued and no input, the
+  // core settles within two clocks and then stands still; skip(n) is n such
+  // clocks.
   bool quiet(const InterpIn& in) const {
     return st_ == ST_IDLE && ic_ == INIT_STEPS && !rv_ && fifo_.count() < seg::SEG_WORDS && !in.wr &&
            !in.abort && !in.clr && !in.set && !in.jog;
@@ -526,6 +505,27 @@ class InterpCore {
       default:
         return {1, 0};
     }
+  }
+
+  // run_for and run_to_end: still_last keeps the last clock from moving.
+  template <typename Moved>
+  uint32_t run(uint32_t n, Moved&& moved, bool still_last) {
+    const InterpIn none{};
+    uint32_t done = 0;
+    while (done < n && st_ == ST_RUN) {
+      if (const uint32_t q = run_quiet(none); q > 0) {
+        const uint32_t m = std::min(q, n - done);
+        skip_run(m);
+        done += m;
+        continue;
+      }
+      const bool moves = sq_ == STEP_MOVE && go_;
+      if (ending() || (still_last && done + 1 == n && moves)) break;
+      clock(none);
+      ++done;
+      if (moves) moved(done);
+    }
+    return done;
   }
 
   // n calm clocks at once, from and to a step other than 1 (skip_run).

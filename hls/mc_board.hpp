@@ -129,9 +129,8 @@ class McBoard {
     n = u_lrx.quiet(w.lrx, n);
     // The walker reading a sample with no telemetry to send: it may run
     // inside the stretch (walk_clocks).
-    const bool walking = !u_regs.quiet(w.regs);
-    if (n == 0 || !u_ltx.quiet(w.ltx) ||
-        (walking && !(u_regs.quiet_but_walk(w.regs) && u_regs.walk_silent())))
+    const bool walking = !u_regs.walk_settled(w.regs);
+    if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet_but_walk(w.regs) || (walking && !u_regs.walk_silent()))
       return 0;
     n = u_safety.quiet(w.safety, n);
     // A running segment may go on inside the stretch while its command

@@ -616,7 +616,8 @@ class McRegs {
   }
 
   // This walk sends no telemetry: none due for the sample it will read,
-  // and none being written.
+  // and none being written. (McBoard::walk_clocks would find that too, on a
+  // copy of the register file; this refuses it before the copy.)
   bool walk_silent() const { return !r.w_tlm && !r.w_tlm_busy && !(r.done_d != 0 && r.tlm_due_l); }
 
   // ---- combinational helpers (the RTL's wires) ---------------------------
