@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "hls/board_regs.hpp"
 #include "vboard_server.hpp"
 
 namespace mc::test {
@@ -59,7 +60,11 @@ TEST(CliMpg, FiveDetentsAtX10MoveFiftyCounts) {
   const json& x = st["axes"][0];
   EXPECT_EQ(x["command"], held["command"]);
   EXPECT_LE(std::llabs(int64_t(x["position"]) - int64_t(x["command"])), 2);
-  EXPECT_EQ(st["fault"], 0);
+  // The jog tripped nothing. The watchdog may have latched since: `mpg`
+  // leaves the drives to it, and how much board time passes before this
+  // status's first frame depends on how long its process takes to start
+  // (wall time; a sanitizer build takes long enough).
+  EXPECT_EQ(uint32_t(st["fault"]) & ~(1u << mc::board::bits::F_WDOG), 0u) << st.dump();
   EXPECT_EQ(run_json(with({"mpg", "--json"}))["pending_counts"], 0);
 
   // --step alone keeps the axis; --off turns it off.
