@@ -450,6 +450,8 @@ TEST(SimEncoder, GrayCodeAndIndex) {
     EXPECT_EQ(p.a, w.a) << c;
     EXPECT_EQ(p.b, w.b) << c;
     EXPECT_EQ(p.z, c % 8 == 0) << c;
+    EXPECT_EQ(quadrature_pins(c, 6).z, c % 6 == 0) << c;  // a count per turn that is not a power of two
+    EXPECT_FALSE(quadrature_pins(c, 0).z) << c;           // no index
     // Neighbouring counts differ in exactly one of A, B.
     const QuadPins n = quadrature_pins(c + 1, 8);
     EXPECT_EQ(int(p.a != n.a) + int(p.b != n.b), 1) << c;

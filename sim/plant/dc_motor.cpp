@@ -254,9 +254,13 @@ void AxisPlant::reset(double position_rad) {
 }
 
 QuadPins quadrature_pins(int64_t count, int encoder_cpr) {
-  const int64_t q = ((count % 4) + 4) % 4;
-  const int64_t rev = encoder_cpr > 0 ? ((count % encoder_cpr) + encoder_cpr) % encoder_cpr : 1;
-  return QuadPins{q == 1 || q == 2, q >= 2, rev == 0};
+  const int64_t q = count & 3;  // count mod 4, negative counts included
+  // The index at every whole turn (count mod cpr == 0, whatever the sign);
+  // a power of two, as the virtual board's "no index" is, without a divide.
+  const bool index =
+      encoder_cpr > 0 &&
+      ((encoder_cpr & (encoder_cpr - 1)) == 0 ? (count & (encoder_cpr - 1)) == 0 : count % encoder_cpr == 0);
+  return QuadPins{q == 1 || q == 2, q >= 2, index};
 }
 
 int pwm_duty(const DriveConfig& d, int32_t u) {
