@@ -4,8 +4,10 @@
 // error of a measured path.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <string>
 
 #include "host/base/errors.hpp"
@@ -52,6 +54,37 @@ TEST(Workpiece, TheFaceIsThePlaneMinusTheDishPlusTheRoughness) {
   other.noise_seed = 2;
   EXPECT_EQ(surface_z_mm(r, 57.3, 12.9), surface_z_mm(plate(2e-6), 57.3, 12.9));
   EXPECT_NE(surface_z_mm(r, 57.3, 12.9), surface_z_mm(other, 57.3, 12.9));
+}
+
+// The virtual probe's cache gives surface_z_mm's values bit for bit along
+// a path that crosses roughness cells both ways, and no point of a box
+// lies farther from the face at its centre than variation_mm says (in and
+// off the plate, where the dish's slope grows).
+TEST(Workpiece, TheCacheGivesTheSameFaceAndTheVariationBoundsIt) {
+  const WorkpieceConfig w = plate(5e-6);
+  SurfaceCache c(w);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> along(-60, 300), tiny(0, 0.01), unit(-1, 1);
+  double x = 40, y = 30;
+  for (int i = 0; i < 20000; ++i) {
+    x += 0.3 * unit(rng) + 0.05;  // mostly within a 5 mm cell, now and then into the next
+    y += 0.3 * unit(rng) - 0.02;
+    ASSERT_EQ(c.z_mm(x, y), surface_z_mm(w, x, y)) << x << ", " << y;
+  }
+  double tightest = 1e9;
+  for (int i = 0; i < 2000; ++i) {
+    const double x0 = along(rng), y0 = along(rng), dx = tiny(rng), dy = tiny(rng);
+    const double z0 = surface_z_mm(w, x0, y0), bound = c.variation_mm(x0, y0, dx, dy);
+    double most = 0;
+    for (int k = 0; k < 40; ++k) {
+      const double d = std::fabs(surface_z_mm(w, x0 + dx * unit(rng), y0 + dy * unit(rng)) - z0);
+      ASSERT_LE(d, bound) << x0 << ", " << y0 << " +- " << dx << ", " << dy;
+      most = std::max(most, d);
+    }
+    if (most > 0) tightest = std::min(tightest, bound / most);
+  }
+  // A bound, not a guess: no looser than the slopes need (here about 1-10x).
+  EXPECT_LT(tightest, 20);
 }
 
 TEST(Workpiece, TheDefaultMachineHasOneAndBadKeysAreRefusedWithTheirLine) {

@@ -34,9 +34,9 @@ std::string mm(double v) {
   return b;
 }
 
-}  // namespace
-
-double surface_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm) {
+// The face at (x, y), the lattice values taken from `cell` (filled in when
+// it holds another cell's).
+double face_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm, SurfaceCache::Cell& cell) {
   const double x = x_mm * 1e-3, y = y_mm * 1e-3;
   const double hx = (w.max_x_m - w.min_x_m) / 2, hy = (w.max_y_m - w.min_y_m) / 2;
   const double u = (x - (w.min_x_m + hx)) / hx, v = (y - (w.min_y_m + hy)) / hy;
@@ -47,13 +47,45 @@ double surface_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm) {
     // down to 4/9 over a cell: 3/2 brings the RMS back to noise_m.
     const double gx = x_mm / kLatticeMm, gy = y_mm / kLatticeMm;
     const auto i = int64_t(std::floor(gx)), j = int64_t(std::floor(gy));
+    if (!cell.set || cell.i != i || cell.j != j) {
+      const int s = w.noise_seed;
+      cell = {i,
+              j,
+              {lattice(s, i, j), lattice(s, i + 1, j), lattice(s, i, j + 1), lattice(s, i + 1, j + 1)},
+              true};
+    }
     const double fx = gx - double(i), fy = gy - double(j);
-    const double n =
-        (1 - fy) * ((1 - fx) * lattice(w.noise_seed, i, j) + fx * lattice(w.noise_seed, i + 1, j)) +
-        fy * ((1 - fx) * lattice(w.noise_seed, i, j + 1) + fx * lattice(w.noise_seed, i + 1, j + 1));
+    const double* c = cell.v;
+    const double n = (1 - fy) * ((1 - fx) * c[0] + fx * c[1]) + fy * ((1 - fx) * c[2] + fx * c[3]);
     z += 1.5 * w.noise_m * n;
   }
   return z * 1e3;
+}
+
+}  // namespace
+
+double surface_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm) {
+  SurfaceCache::Cell cell;
+  return face_z_mm(w, x_mm, y_mm, cell);
+}
+
+double SurfaceCache::z_mm(double x_mm, double y_mm) {
+  return face_z_mm(w_, x_mm, y_mm, cell_);
+}
+
+double SurfaceCache::variation_mm(double x_mm, double y_mm, double dx_mm, double dy_mm) const {
+  const WorkpieceConfig& w = w_;
+  const double hx = (w.max_x_m - w.min_x_m) / 2 * 1e3, hy = (w.max_y_m - w.min_y_m) / 2 * 1e3;
+  const double u0 = (x_mm - (w.min_x_m * 1e3 + hx)) / hx, v0 = (y_mm - (w.min_y_m * 1e3 + hy)) / hy;
+  const double du = dx_mm / hx, dv = dy_mm / hy;
+  const double u = std::fabs(u0) + du, v = std::fabs(v0) + dv;  // the most |u|, |v| in the box
+  // Plane; dish b (1 - u^2)(1 - v^2), |u1^2 - u0^2| <= 2 u du; roughness,
+  // bilinear between values within +-sqrt 3: at most 2 sqrt 3 a lattice
+  // step along each axis.
+  const double plane = std::fabs(w.tilt_x) * dx_mm + std::fabs(w.tilt_y) * dy_mm;
+  const double dish = std::fabs(w.bow_m) * 1e3 * (2 * u * du * (1 + v * v) + (1 + u * u) * 2 * v * dv);
+  const double rough = 1.5 * w.noise_m * 1e3 * 2 * std::sqrt(3.0) * (dx_mm + dy_mm) / kLatticeMm;
+  return (plane + dish + rough) * (1 + 1e-9) + 1e-9;
 }
 
 HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double inset_mm) {

@@ -23,6 +23,27 @@ namespace mc::machine {
 // same noise_seed.
 double surface_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm);
 
+// surface_z_mm for a path of nearby points (the virtual probe asks every
+// plant step): the same values, with the roughness's lattice values kept
+// for the last 5 mm cell instead of hashed anew.
+class SurfaceCache {
+ public:
+  explicit SurfaceCache(const WorkpieceConfig& w) : w_(w) {}
+  double z_mm(double x_mm, double y_mm);
+  // How far the face can rise or fall from (x, y) to any point within dx,
+  // dy of it (mm; a bound from the slopes of plane, dish and roughness).
+  double variation_mm(double x_mm, double y_mm, double dx_mm, double dy_mm) const;
+  struct Cell {
+    int64_t i = 0, j = 0;
+    double v[4] = {};  // at (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)
+    bool set = false;
+  };
+
+ private:
+  WorkpieceConfig w_;
+  Cell cell_;
+};
+
 // What a perfect probe would map: nx x ny points evenly over the workpiece,
 // inset by `inset_mm` from its edges, heights relative to the first point.
 HeightMap sample_height_map(const WorkpieceConfig& w, int nx, int ny, double inset_mm);

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <deque>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "host/base/errors.hpp"
@@ -106,6 +107,7 @@ struct VirtualBoard::Impl {
         s.plant = std::make_unique<AxisPlant>(m.axes[a], m.plant_dt_s);
       s.cpr = m.axes[a].encoder_cpr;
       s.supply_v = m.axes[a].drive.supply_v;
+      m_per_count[a] = 1 / machine::counts_per_m(m.axes[a]);
       s.shown = s.encoder_count();
       ++naxes;
     }
@@ -115,7 +117,10 @@ struct VirtualBoard::Impl {
       if (const auto& h = m.axes[size_t(a)].home)
         lim[a] = Contact(bounce_steps(h->bounce_s), seed_base + uint64_t(a) + 1);
     has_probe = m.workpiece && naxes == kBoardAxes;
-    if (has_probe) probe = Contact(bounce_steps(m.probe.bounce_s), seed_base + kBoardAxes + 1);
+    if (has_probe) {
+      probe = Contact(bounce_steps(m.probe.bounce_s), seed_base + kBoardAxes + 1);
+      face.emplace(*m.workpiece);
+    }
     place_contacts(true);
     for (int a = 0; a < kBoardAxes; ++a) {
       const Slot& s = slot[a];
@@ -139,7 +144,7 @@ struct VirtualBoard::Impl {
     if (x != face_x || y != face_y) {  // the tables mostly stand, or move in Z alone
       face_x = x;
       face_y = y;
-      face_z = machine::surface_z_mm(*m.workpiece, x, y);
+      face_z = face->z_mm(x, y);
     }
     return slot[2].table_m() * 1e3 <= face_z;
   }
@@ -227,6 +232,7 @@ struct VirtualBoard::Impl {
         if ((c & 1) == 0) {
           for (int a = 0; a < naxes; ++a) {
             const Slot& s = slot[a];
+            if (s.emit_n == 0) continue;  // its pins show s.shown already
             const int64_t n = std::min<int64_t>(std::llabs(s.emit_n), int64_t(c / 2 + 1));
             const QuadPins q = quadrature_pins(s.emit_from + (s.emit_n < 0 ? -n : n), s.cpr);
             pins.enc_a[a] = q.a;
@@ -261,9 +267,11 @@ struct VirtualBoard::Impl {
   // which the board only counts (the host line idle, no frame being worked
   // on, no PID tick or drive update, no interpolator iteration, no encoder
   // edge to show) go by with the board advanced over them at once. The
-  // plants still take every step, with the drive the clock-by-clock path
-  // would count (the PWM pins follow their counters), so positions and
-  // bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs). It stops
+  // plants take every step with the drive the clock-by-clock path would
+  // count (the PWM pins follow their counters): by runs of equal drive
+  // where no switch can change (hold_plants), else one by one. Positions
+  // and bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs,
+  // VBoard.HeldPlantRunsGiveTheStepsTheRtlTakes). It stops
   // after the step in which an encoder count changes or a switch is
   // crossed, and never starts while one bounces: the switch pins change
   // only in plant_step(). The spindle and coolant pins hold (SP_PWM aside,
@@ -280,21 +288,106 @@ struct VirtualBoard::Impl {
     const uint64_t most = board->idle_clocks(pins, uint32_t(std::min<uint64_t>(steps * k, 1u << 30))) / k;
     if (most == 0) return false;
     uint64_t j = 0;
-    bool edge = false;
-    const bool enabled = board->drv_en();
-    while (j < most && !edge) {
-      for (int a = 0; a < naxes; ++a) {
-        Slot& s = slot[a];
-        s.plant_step(s.plant ? board->idle_drive(a, uint32_t(j * k), k) : 0, k, enabled);
-        edge = edge || s.encoder_count() != s.shown;
+    if (contacts_clear()) {
+      j = hold_plants(most);
+      held_steps += j;
+    } else {
+      bool edge = false;
+      const bool enabled = board->drv_en();
+      while (j < most && !edge) {
+        for (int a = 0; a < naxes; ++a) {
+          Slot& s = slot[a];
+          s.plant_step(s.plant ? board->idle_drive(a, uint32_t(j * k), k) : 0, k, enabled);
+          edge = edge || s.encoder_count() != s.shown;
+        }
+        edge = edge || !contacts_quiet();
+        ++j;
       }
-      edge = edge || !contacts_quiet();
-      ++j;
     }
     board->advance(pins, uint32_t(j * k));
     rx.clock_n(board->tx(), uint32_t(j * k));
     cycles += j * k;
     return true;
+  }
+
+  // No switch can change while every table stays within its encoder
+  // count: each home switch more than two counts away, and the probe's gap
+  // wider than two counts of Z and all the face can rise or fall within
+  // two counts of X and Y. (Servo axes only: a stepper's table is not tied
+  // to a count.)
+  bool contacts_clear() const {
+    for (int a = 0; a < naxes; ++a) {
+      if (!slot[a].plant) return false;
+      if (has_home(a) &&
+          std::fabs(slot[a].table_m() - m.axes[size_t(a)].home->switch_m) <= 2 * m_per_count[a])
+        return false;
+    }
+    if (!has_probe) return true;
+    const double x = slot[0].table_m() * 1e3, y = slot[1].table_m() * 1e3, z = slot[2].table_m() * 1e3;
+    const double band =
+        2e3 * m_per_count[2] + face->variation_mm(x, y, 2e3 * m_per_count[0], 2e3 * m_per_count[1]);
+    return std::fabs(z - face->z_mm(x, y)) > band;
+  }
+
+  // The plants over up to `most` steps of a stretch, as jump()'s loop steps
+  // them (to the end of the step in which some encoder count changes), but
+  // by runs of steps with the same drive (AxisPlant::hold): a switching
+  // drive's pin is high through whole steps, then low through whole steps,
+  // with a step of each edge between. contacts_clear() must hold. Returns
+  // the steps taken.
+  uint64_t hold_plants(uint64_t most) {
+    uint64_t end = most;
+    uint64_t took[kBoardAxes] = {};
+    std::optional<AxisPlant> before[kBoardAxes];
+    for (int a = 0; a < naxes; ++a) {
+      before[a].emplace(*slot[a].plant);
+      took[a] = hold_axis(a, end);
+      if (slot[a].encoder_count() != slot[a].shown) end = took[a];
+    }
+    // An axis that went past the step in which a later one's count changed
+    // takes its steps again, up to that one.
+    for (int a = 0; a < naxes; ++a)
+      if (took[a] > end) {
+        *slot[a].plant = *before[a];
+        hold_axis(a, end);
+      }
+    return end;
+  }
+  // Axis a's plant over up to end steps, stopping after a count change.
+  uint64_t hold_axis(int a, uint64_t end) {
+    Slot& s = slot[a];
+    uint64_t j = 0;
+    while (j < end) {
+      const int32_t d = board->idle_drive(a, uint32_t(j * k), k);
+      uint64_t r = 1;
+      if (d == 0 || uint32_t(std::abs(d)) == k) {
+        // The run of whole steps high (or low) from j: sum == steps * d
+        // holds only while every step's is d. Doubling, then halving.
+        const auto whole = [&](uint64_t n) {
+          return board->idle_drive(a, uint32_t(j * k), uint32_t(n * k)) == int32_t(n) * d;
+        };
+        uint64_t bad = 0;
+        for (uint64_t t = 2; r < end - j; t *= 2) {
+          const uint64_t n = std::min(t, end - j);
+          if (!whole(n)) {
+            bad = n;
+            break;
+          }
+          r = n;
+        }
+        while (bad > r + 1) {
+          const uint64_t mid = r + (bad - r) / 2;
+          if (whole(mid))
+            r = mid;
+          else
+            bad = mid;
+        }
+      }
+      const uint64_t t = s.plant->hold(s.supply_v * double(d) / double(k), r);
+      j += t;
+      if (s.encoder_count() != s.shown) break;
+    }
+    return j;
   }
 
   MachineConfig m;
@@ -304,14 +397,17 @@ struct VirtualBoard::Impl {
   std::unique_ptr<BoardModel> board;
   IcebreakerPins pins;
   Slot slot[kBoardAxes];
+  double m_per_count[kBoardAxes] = {};  // table travel per encoder count
   int naxes = 0;
   UartSender tx;
   UartReceiver rx;
   uint64_t cycles = 0, last_activity = 0;
+  uint64_t held_steps = 0;  // held_steps()
   // The switches: each home switch on its axis's limit pin, the probe.
   Contact lim[kBoardAxes], probe;
   bool has_probe = false;
-  // surface_z_mm at the last X, Y asked: a cache, so mutable.
+  // The face (surface_z_mm) at the last X, Y asked: a cache, so mutable.
+  mutable std::optional<machine::SurfaceCache> face;
   mutable double face_x = std::nan(""), face_y = std::nan(""), face_z = 0;
   // The spindle and coolant: the pins now, their changes, and where the
   // interval since the last change began (clock, SP_PWM high clocks).
@@ -354,6 +450,9 @@ uint64_t VirtualBoard::cycles() const {
 }
 uint64_t VirtualBoard::stepped_clocks() const {
   return impl_->board->stepped();
+}
+uint64_t VirtualBoard::held_steps() const {
+  return impl_->held_steps;
 }
 BoardEngine VirtualBoard::engine() const {
   return impl_->engine;

@@ -88,6 +88,9 @@ class VirtualBoard {
   uint64_t cycles() const;
   // Of cycles(), the clocks the engine stepped one by one (the RTL: all).
   uint64_t stepped_clocks() const;
+  // Plant steps taken by runs of equal drive rather than one by one
+  // (AxisPlant::hold; the twin engine, where no switch can change).
+  uint64_t held_steps() const;
   BoardEngine engine() const;
   double clock_hz() const;
   double board_seconds() const { return double(cycles()) / clock_hz(); }
