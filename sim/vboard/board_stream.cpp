@@ -9,9 +9,14 @@
 #include "host/link/board_link.hpp"
 #include "host/link/board_state.hpp"
 #include "host/motion/board_run.hpp"
+#include "host/machine/workpiece.hpp"
 #include "host/motion/interp_plan.hpp"
 
 namespace mc::sim {
+
+namespace {
+constexpr double kClearZ_m = 0.005;  // measure_vboard_speed's Z above the face
+}  // namespace
 
 size_t BoardStream::read(uint8_t* p, size_t n, std::chrono::milliseconds timeout) {
   const uint64_t end = b_.cycles() + uint64_t(double(timeout.count()) * 1e-3 * b_.clock_hz());
@@ -34,6 +39,10 @@ VBoardSpeed measure_vboard_speed(const MachineConfig& m, BoardEngine e, const st
   if (workload != "hold" && workload != "move")
     throw mc::host::InputError("workload", "'" + workload + "'", "hold or move");
   VirtualBoard board(m, 0, e);
+  // Z clear of the workpiece, as between cuts: a probe dragged along the
+  // face would chatter on its roughness, which no job does.
+  if (m.workpiece && board.configured_axes() > 2)
+    board.start_at(2, mc::machine::surface_z_mm(*m.workpiece, 0, 0) * 1e-3 + kClearZ_m);
   BoardStream s(board);
   mc::host::BoardLink link(s);
   const mc::host::Note quiet = [](const std::string&) {};

@@ -53,7 +53,8 @@ struct VBoardSpeed {
 // Gains on every configured axis (the machine's PID at Ts = 100 us), armed,
 // every PID enabled; then for board_s of board time either hold position
 // ("hold") or move X and Y back and forth at 25 mm/s ("move"), the host
-// reading STATUS every 10 ms of board time (the watchdog fed).
+// reading STATUS every 10 ms of board time (the watchdog fed). Z stands
+// 5 mm above the workpiece's face, if the machine has one.
 VBoardSpeed measure_vboard_speed(const MachineConfig& m, BoardEngine e, const std::string& workload,
                                  double board_s);
 
