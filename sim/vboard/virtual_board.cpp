@@ -140,13 +140,18 @@ struct VirtualBoard::Impl {
     return h.direction > 0 ? x >= h.switch_m : x <= h.switch_m;
   }
   bool probe_closed() const {
-    const double x = slot[0].table_m() * 1e3, y = slot[1].table_m() * 1e3;
-    if (x != face_x || y != face_y) {  // the tables mostly stand, or move in Z alone
-      face_x = x;
-      face_y = y;
-      face_z = face->z_mm(x, y);
-    }
+    look_at_face();
     return slot[2].table_m() * 1e3 <= face_z;
+  }
+  // The face under the probe (and its band, contacts_clear()), kept while
+  // X and Y stand: the tables mostly stand, or move in Z alone.
+  void look_at_face() const {
+    const double x = slot[0].table_m() * 1e3, y = slot[1].table_m() * 1e3;
+    if (x == face_x && y == face_y) return;
+    face_x = x;
+    face_y = y;
+    face_z = face->z_mm(x, y);
+    face_band = std::nan("");
   }
   // The switches where the tables are: at power-up (settle, no bounce) or
   // at a plant-step boundary.
@@ -323,10 +328,11 @@ struct VirtualBoard::Impl {
         return false;
     }
     if (!has_probe) return true;
-    const double x = slot[0].table_m() * 1e3, y = slot[1].table_m() * 1e3, z = slot[2].table_m() * 1e3;
-    const double band =
-        2e3 * m_per_count[2] + face->variation_mm(x, y, 2e3 * m_per_count[0], 2e3 * m_per_count[1]);
-    return std::fabs(z - face->z_mm(x, y)) > band;
+    look_at_face();
+    if (std::isnan(face_band))
+      face_band = 2e3 * m_per_count[2] +
+                  face->variation_mm(face_x, face_y, 2e3 * m_per_count[0], 2e3 * m_per_count[1]);
+    return std::fabs(slot[2].table_m() * 1e3 - face_z) > face_band;
   }
 
   // The plants over up to `most` steps of a stretch, as jump()'s loop steps
@@ -406,9 +412,10 @@ struct VirtualBoard::Impl {
   // The switches: each home switch on its axis's limit pin, the probe.
   Contact lim[kBoardAxes], probe;
   bool has_probe = false;
-  // The face (surface_z_mm) at the last X, Y asked: a cache, so mutable.
+  // The face (surface_z_mm) at the last X, Y asked, and the band
+  // contacts_clear() wants there (NaN: not asked yet): a cache, so mutable.
   mutable std::optional<machine::SurfaceCache> face;
-  mutable double face_x = std::nan(""), face_y = std::nan(""), face_z = 0;
+  mutable double face_x = std::nan(""), face_y = std::nan(""), face_z = 0, face_band = 0;
   // The spindle and coolant: the pins now, their changes, and where the
   // interval since the last change began (clock, SP_PWM high clocks).
   VirtualBoard::SpindleState spindle;
