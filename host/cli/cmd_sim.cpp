@@ -97,8 +97,8 @@ void serve(const ServeOptions& o) {
   so.idle_exit_s = idle_min * 60;
   so.status_every_s = every;
   so.wheel = &wheel;
-  so.status = [](const mc::sim::ServeStatus& s) {
-    char line[256];
+  so.status = [paced](const mc::sim::ServeStatus& s) {
+    char line[320];
     if (s.dormant) {
       std::snprintf(line, sizeof line,
                     "motionctl sim: board %.3f s: link quiet, drives off, axes at rest: clock stopped until "
@@ -112,7 +112,10 @@ void serve(const ServeOptions& o) {
                     static_cast<unsigned long long>(s.bytes_in), static_cast<unsigned long long>(s.bytes_out),
                     static_cast<unsigned long long>(s.bytes_dropped));
     }
-    std::cerr << line << std::endl;
+    std::cerr << line;
+    // Paced: the periods late so far, to see when they came.
+    if (paced && !s.dormant) std::cerr << ", " << s.late_periods << " of " << s.periods << " periods late";
+    std::cerr << std::endl;
   };
   const mc::sim::ServeStatus end = mc::sim::serve(board, pty, so, g_stop);
   if (registered) unregister_sim_server(me);
