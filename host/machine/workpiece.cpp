@@ -34,13 +34,29 @@ std::string mm(double v) {
   return b;
 }
 
+// A point on the plate: machine X, Y (m), and where it lies between the
+// plate's edges, u and v (-1 to 1 on the plate), with the half widths
+// hx, hy (m): the dish is b (1 - u^2)(1 - v^2).
+struct PlatePoint {
+  double x, y, u, v, hx, hy;
+};
+PlatePoint plate_point(const WorkpieceConfig& w, double x_mm, double y_mm) {
+  PlatePoint p;
+  p.x = x_mm * 1e-3;
+  p.y = y_mm * 1e-3;
+  p.hx = (w.max_x_m - w.min_x_m) / 2;
+  p.hy = (w.max_y_m - w.min_y_m) / 2;
+  p.u = (p.x - (w.min_x_m + p.hx)) / p.hx;
+  p.v = (p.y - (w.min_y_m + p.hy)) / p.hy;
+  return p;
+}
+
 // The face at (x, y), the lattice values taken from `cell` (filled in when
 // it holds another cell's).
 double face_z_mm(const WorkpieceConfig& w, double x_mm, double y_mm, SurfaceCache::Cell& cell) {
-  const double x = x_mm * 1e-3, y = y_mm * 1e-3;
-  const double hx = (w.max_x_m - w.min_x_m) / 2, hy = (w.max_y_m - w.min_y_m) / 2;
-  const double u = (x - (w.min_x_m + hx)) / hx, v = (y - (w.min_y_m + hy)) / hy;
-  double z = w.top_z_m + w.tilt_x * (x - w.min_x_m) + w.tilt_y * (y - w.min_y_m) -
+  const PlatePoint p = plate_point(w, x_mm, y_mm);
+  const double u = p.u, v = p.v;
+  double z = w.top_z_m + w.tilt_x * (p.x - w.min_x_m) + w.tilt_y * (p.y - w.min_y_m) -
              w.bow_m * (1 - u * u) * (1 - v * v);
   if (w.noise_m > 0) {
     // Bilinear between independent unit values averages their variance
@@ -75,10 +91,9 @@ double SurfaceCache::z_mm(double x_mm, double y_mm) {
 
 double SurfaceCache::variation_mm(double x_mm, double y_mm, double dx_mm, double dy_mm) const {
   const WorkpieceConfig& w = w_;
-  const double hx = (w.max_x_m - w.min_x_m) / 2 * 1e3, hy = (w.max_y_m - w.min_y_m) / 2 * 1e3;
-  const double u0 = (x_mm - (w.min_x_m * 1e3 + hx)) / hx, v0 = (y_mm - (w.min_y_m * 1e3 + hy)) / hy;
-  const double du = dx_mm / hx, dv = dy_mm / hy;
-  const double u = std::fabs(u0) + du, v = std::fabs(v0) + dv;  // the most |u|, |v| in the box
+  const PlatePoint p = plate_point(w, x_mm, y_mm);
+  const double du = dx_mm * 1e-3 / p.hx, dv = dy_mm * 1e-3 / p.hy;
+  const double u = std::fabs(p.u) + du, v = std::fabs(p.v) + dv;  // the most |u|, |v| in the box
   // Plane; dish b (1 - u^2)(1 - v^2), |u1^2 - u0^2| <= 2 u du; roughness,
   // bilinear between values within +-sqrt 3: at most 2 sqrt 3 a lattice
   // step along each axis.
