@@ -98,7 +98,7 @@ void serve(const ServeOptions& o) {
   so.status_every_s = every;
   so.wheel = &wheel;
   so.status = [paced](const mc::sim::ServeStatus& s) {
-    char line[320];
+    char line[256];
     if (s.dormant) {
       std::snprintf(line, sizeof line,
                     "motionctl sim: board %.3f s: link quiet, drives off, axes at rest: clock stopped until "

@@ -8,8 +8,8 @@
 #include "host/control/board_gains.hpp"
 #include "host/link/board_link.hpp"
 #include "host/link/board_state.hpp"
-#include "host/motion/board_run.hpp"
 #include "host/machine/workpiece.hpp"
+#include "host/motion/board_run.hpp"
 #include "host/motion/interp_plan.hpp"
 
 namespace mc::sim {

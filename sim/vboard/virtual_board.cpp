@@ -346,7 +346,7 @@ struct VirtualBoard::Impl {
     uint64_t took[kBoardAxes] = {};
     std::optional<AxisPlant> before[kBoardAxes];
     for (int a = 0; a < naxes; ++a) {
-      before[a].emplace(*slot[a].plant);
+      if (a + 1 < naxes) before[a].emplace(*slot[a].plant);  // the last never goes past the end
       took[a] = hold_axis(a, end);
       if (slot[a].encoder_count() != slot[a].shown) end = took[a];
     }
