@@ -609,6 +609,11 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   // Free-running: host bytes came and the board has answered them since.
   bool asked = false, answered = false;
   const uint64_t quiet_line = 2 * uint64_t(std::llround(board.clock_hz() / 1e5));  // two bytes' time
+  // TX bytes not written yet wait at most this long (board time), or until
+  // a packet's payload has gathered (out_since: when the first came).
+  constexpr size_t kPacket = 62;
+  const uint64_t latency = uint64_t(std::llround(1e-3 * board.clock_hz()));
+  uint64_t out_since = 0;
 
   const auto report = [&](bool force) {
     st.wall_s = seconds_since(t0);
@@ -642,8 +647,15 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   while (!stop.load()) {
     if (board.rx_backlog() < 64) take_input();
     wheel_asks();
+    const size_t had = out.size();
     board.run(slice, out);
-    if (!out.empty()) {
+    if (had == 0 && !out.empty()) out_since = board.cycles();
+    // The board's USB bridge (the FT2232H) ships TX bytes in packets: when a
+    // packet's worth has gathered or its latency timer runs out. An answer
+    // goes as soon as the line falls quiet after it. Each write to the
+    // terminal costs the kernel more than the board's 100 us of bytes.
+    if (!out.empty() && (out.size() >= kPacket || board.cycles() - out_since >= latency ||
+                         board.link_quiet_clocks() >= quiet_line)) {
       const ssize_t n = ::write(fd, out.data(), out.size());
       const size_t sent = n > 0 ? size_t(n) : 0;
       st.bytes_out += sent;
