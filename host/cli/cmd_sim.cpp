@@ -214,10 +214,10 @@ void add_sim_command(CLI::App& app) {
       "rtl the Verilated board top, clock by clock. A DC-motor plant per axis of\n"
       "the machine config (--config before the command, or the built-in one) on its encoder and H-bridge\n"
       "pins, and its UART bit by bit on a pseudo-terminal: 'motionctl --port PTY status' talks to it.\n"
-      "--speed 1 paces it to the wall clock (never ahead of it; slower when the model is slower) and counts\n"
-      "the 100 us periods finished late; --speed max runs free. On exit it prints the periods late or the\n"
-      "speed reached (x real time). The board's watchdog runs on board time. Status lines go to stderr.\n"
-      "SIGINT or SIGTERM stops it.");
+      "--speed 1 paces it to the wall clock (at most 4 ms ahead of it; slower when the model is slower) and\n"
+      "counts the 100 us periods finished late; --speed max runs free. On exit it prints the periods late\n"
+      "or the speed reached (x real time). The board's watchdog runs on board time. Status lines go to\n"
+      "stderr. SIGINT or SIGTERM stops it.");
   srv->add_option("--config", o->config, "Machine TOML (the same as the global --config)")->type_name("FILE");
   srv->add_option("--speed", o->speed, "1: paced to the wall clock (default); max: free-running")
       ->type_name("1|max");

@@ -597,7 +597,7 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   // most that late, well inside the protocol's 1 ms byte timeout.
   const uint64_t slice = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 * board.clock_hz())));
   const double period_s = double(slice) / board.clock_hz();
-  constexpr double kLead = 1e-3;
+  constexpr double kLead = 4e-3;
   const int fd = pty.master_fd();
   const auto t0 = Clock::now();
   auto last_host = t0;
@@ -680,10 +680,12 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
       const double ahead = board.board_seconds() - (seconds_since(t0) - paused_s);
       st.model_bound = ahead < 0;
       if (ahead < -period_s) ++st.late_periods;
-      // The board may run up to kLead ahead of the wall clock: it sleeps
-      // once per millisecond rather than once per period, so that a late
-      // wake-up from the OS eats into the lead instead of making the next
-      // periods late. A host byte ends the sleep.
+      // The board may run up to kLead ahead of the wall clock, and sleeps
+      // back to half of it (every 2 ms rather than every period): a late
+      // wake-up, a few milliseconds in which the OS runs something else or
+      // a burst of work for the model (the host filling the segment queue)
+      // eats into the lead instead of making periods late. A host byte
+      // ends the sleep.
       if (ahead > kLead) {
         const double wait = ahead - kLead / 2;
         const timespec ts{time_t(wait), long((wait - std::floor(wait)) * 1e9)};
