@@ -109,7 +109,8 @@ class McBoard {
 
   // ---- fast-forward ----------------------------------------------------------
   // Clocks (up to limit) with these inputs held that change nothing but
-  // counters and timers: the UARTs idle or inside a bit, the link idle or
+  // counters and timers (and TX's bits): the receiver idle or inside a
+  // bit, the transmitter idle or inside a byte, the link idle or
   // waiting (for the next byte of a frame before the timeout, for uart_tx),
   // no frame being worked on, no sample due, the decoders settled, no
   // fault. skip(n) then does n of them at once, leaving exactly the state of

@@ -16,7 +16,8 @@
 // run(p, n) does n clocks exactly as n step(p) would, but skips at once
 // the clocks in which only counters move (idle_clocks/advance): the UART
 // idle, no frame being worked on, no PID sample due, no timer expiring.
-// PWM and LED pins keep following their counters inside such a stretch.
+// PWM and LED pins keep following their counters inside such a stretch,
+// and a byte on TX goes out bit by bit (tx_levels tells the line there).
 //
 // Synthesizable subset: fixed-width integers, no heap, static loop bounds.
 #pragma once
@@ -99,30 +100,39 @@ class MotioncoreIcebreaker {
     idle_ = pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
   }
 
+  // TX after each of the next n clocks that advance(p, n) would do, as runs
+  // (f(level, clocks), in order): a byte going out keeps the stretch going
+  // (not RTL).
+  template <typename F>
+  void tx_levels(uint32_t n, F&& f) const {
+    u_board.u_utx.levels(n, f);
+  }
+
   // n clocks with these pins held: step(p) where something happens,
   // advance() over the rest. Returns how many clocks were skipped.
-  // on_step(i) is called after each clock stepped, i the clocks done so far
-  // in this call (that one included). TX changes only in stepped clocks, so
-  // a host that decodes the line reads tx() there and knows when it changed.
-  template <typename OnStep>
-  uint64_t run(const IcebreakerPins& p, uint64_t n, OnStep&& on_step) {
+  // line(level, clocks) tells TX after every clock of the call, in order, as
+  // runs (a stepped clock is a run of one), so that a host can decode it.
+  template <typename Line>
+  uint64_t run(const IcebreakerPins& p, uint64_t n, Line&& line) {
     uint64_t skipped = 0, done = 0;
     while (done < n) {
       const uint64_t left = n - done;
       const uint32_t k = idle_clocks(p, left > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(left));
       if (k > 0) {
+        tx_levels(k, line);
         advance(p, k);
         skipped += k;
         done += k;
       } else {
         step(p);
-        on_step(++done);
+        line(tx(), uint32_t(1));
+        ++done;
       }
     }
     return skipped;
   }
   uint64_t run(const IcebreakerPins& p, uint64_t n) {
-    return run(p, n, [](uint64_t) {});
+    return run(p, n, [](bool, uint32_t) {});
   }
 
  private:

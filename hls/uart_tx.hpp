@@ -49,14 +49,41 @@ struct UartTx {
     }
   }
 
-  // Clocks (up to limit) that change nothing but the bit timer: idle with
-  // nothing to send, or inside a bit. skip(n) does them.
+  // Clocks (up to limit) that change nothing but the bit timer and the
+  // bits going out: idle with nothing to send, or a byte on the line up to
+  // the clock that ends it (ready_o() rises there). skip(n) does them;
+  // levels() tells the line over them.
   uint32_t quiet(bool valid_i, uint32_t limit) const {
     if (!busy) return valid_i ? 0 : limit;
-    return cnt < limit ? cnt : limit;
+    const uint32_t rest = cnt + left * uint32_t(DIV);
+    return rest < limit ? rest : limit;
   }
   void skip(uint32_t n) {
-    if (busy) cnt -= n;
+    if (!busy || n <= cnt) {
+      if (busy) cnt -= n;
+      return;
+    }
+    // The bit on the line ends after cnt + 1 clocks, each next one DIV later.
+    const uint32_t shifts = (n - cnt + FULL) / DIV, into = n - cnt - 1 - (shifts - 1) * DIV;
+    cnt = FULL - into;
+    left = uint8_t(left - shifts);
+    tx_o = sh >> (shifts - 1) & 1;
+    sh = uint16_t((sh >> shifts | 0x1FFu << (9 - shifts)) & 0x1FF);
+  }
+  // The line after each of the next n quiet clocks, as runs: f(level,
+  // clocks) in order, the clocks adding up to n.
+  template <typename F>
+  void levels(uint32_t n, F&& f) const {
+    if (!busy || n <= cnt) {
+      f(tx_o, n);
+      return;
+    }
+    if (cnt > 0) f(tx_o, cnt);
+    for (uint32_t done = cnt, b = 0; done < n; ++b) {
+      const uint32_t m = n - done < uint32_t(DIV) ? n - done : uint32_t(DIV);
+      f(bool(sh >> b & 1), m);
+      done += m;
+    }
   }
 };
 

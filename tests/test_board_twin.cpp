@@ -977,9 +977,10 @@ constexpr Profile kIdle{"idle", 80, 10, 5, 3, 12, 2, 1, 1, 1, 1, 1, 30'000, 6, 3
 
 // advance(n) over random states leaves exactly the state of n step()s: a twin
 // that skips every idle stretch it can against one that steps every clock,
-// the whole state compared after each skip and the pins every stepped clock.
+// the whole state compared after each skip, the pins every stepped clock and
+// TX every clock (a byte goes out inside an advance).
 TEST(BoardTwin, AdvanceEqualsSteps) {
-  uint64_t all_skips = 0;
+  uint64_t all_skips = 0, tx_bits = 0;  // tx_bits: TX edges inside advances
   for (uint64_t seed : {401, 402, 403}) {
     std::mt19937_64 rng(seed);
     Host host(seed, kIdle);
@@ -998,11 +999,17 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
         const uint32_t n = rng() % 4 ? k : 1 + uint32_t(rng() % k);  // the whole stretch, or part of it
         uint32_t high[3];
         for (int a = 0; a < 3; ++a) high[a] = fast.pwm_high_in(a, n);
+        std::vector<bool> line;  // TX after each clock, as tx_levels() tells it
+        fast.tx_levels(n, [&](bool level, uint32_t m) { line.insert(line.end(), m, level); });
+        ASSERT_EQ(line.size(), n);
         fast.advance(p, n);
         uint32_t stepped_high[3] = {};
         for (uint32_t i = 0; i < n; ++i) {
+          const bool tx = ref.tx();
           ref.step(p);
           for (int a = 0; a < 3; ++a) stepped_high[a] += ref.pwm(a);
+          ASSERT_EQ(line[i], ref.tx()) << "TX after clock " << i + 1 << " of " << n << " at clock " << clocks;
+          tx_bits += ref.tx() != tx;
         }
         for (int a = 0; a < 3; ++a)
           ASSERT_EQ(high[a], stepped_high[a])
@@ -1025,7 +1032,9 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
     EXPECT_GT(skipped, clocks / 2) << "seed " << seed;
     all_skips += skips;
   }
+  std::printf("advance: %llu TX edges inside advances\n", (unsigned long long)tx_bits);
   EXPECT_GT(all_skips, 3000u);
+  EXPECT_GT(tx_bits, 0u);  // the host's replies are few here; RunEqualsSteps sees thousands
 }
 
 // run(p, n) is n step(p)s, whatever the state: the pins held as long as the
@@ -1039,23 +1048,27 @@ TEST(BoardTwin, RunEqualsSteps) {
   Twin ref, fast;
   IcebreakerPins p;
   uint64_t clocks = 0, skipped = 0;
-  std::vector<std::pair<uint64_t, bool>> stepped;  // clock in the stretch, TX after it
-  uint64_t tx_edges = 0;
+  std::vector<bool> line;        // TX after each clock of the stretch, as run() tells it
+  std::vector<uint32_t> run_of;  // the length of the run each clock came in
+  uint64_t tx_edges = 0, tx_edges_skipped = 0;
   while (clocks < 1'500'000) {
     const uint32_t n = host.line(1 + uint32_t(rng() % (rng() % 3 ? 12 : 5000)), p.rx);
     pins.clock(p);
-    stepped.clear();
-    skipped += fast.run(p, n, [&](uint64_t i) { stepped.emplace_back(i, fast.tx()); });
-    // Every TX edge falls in a clock run() stepped, with the same level.
-    size_t j = 0;
+    line.clear();
+    run_of.clear();
+    skipped += fast.run(p, n, [&](bool level, uint32_t m) {
+      line.insert(line.end(), m, level);
+      run_of.insert(run_of.end(), m, m);
+    });
+    ASSERT_EQ(line.size(), n) << "clock " << clocks;
+    // TX after every clock, stepped or skipped, is the clock-by-clock one.
     for (uint32_t i = 1; i <= n; ++i) {
       const bool tx = ref.tx();
       ref.step(p);
-      while (j < stepped.size() && stepped[j].first < i) ++j;
+      ASSERT_EQ(line[i - 1], ref.tx()) << "TX after clock " << clocks + i;
       if (ref.tx() == tx) continue;
       ++tx_edges;
-      ASSERT_TRUE(j < stepped.size() && stepped[j].first == i && stepped[j].second == ref.tx())
-          << "a TX edge inside an advance, clock " << clocks + i;
+      tx_edges_skipped += run_of[i - 1] > 1;  // a stepped clock is a run of one
     }
     clocks += n;
     ASSERT_TRUE(same_pins(ref, fast)) << "clock " << clocks;
@@ -1066,10 +1079,13 @@ TEST(BoardTwin, RunEqualsSteps) {
     ASSERT_EQ(state_diff(ref, fast), "") << "clock " << clocks;
   }
   ASSERT_EQ(state_diff(ref, fast), "");
-  std::printf("run (seed %llu): %llu clocks, %llu skipped, %llu TX edges\n", (unsigned long long)seed,
-              (unsigned long long)clocks, (unsigned long long)skipped, (unsigned long long)tx_edges);
+  std::printf(
+      "run (seed %llu): %llu clocks, %llu skipped, %llu TX edges, %llu of them in skipped stretches\n",
+      (unsigned long long)seed, (unsigned long long)clocks, (unsigned long long)skipped,
+      (unsigned long long)tx_edges, (unsigned long long)tx_edges_skipped);
   EXPECT_GT(skipped, clocks / 20);
   EXPECT_GT(tx_edges, 1000u);
+  EXPECT_GT(tx_edges_skipped, tx_edges / 20);
 }
 
 // A frame cut short is dropped when the byte timeout expires, also when

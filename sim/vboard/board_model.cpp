@@ -10,7 +10,7 @@ namespace {
 // The twin: stepped where something happens, advanced over the rest.
 class TwinBoard final : public BoardModel {
  public:
-  uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive) override {
+  uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive, UartReceiver& line) override {
     const uint32_t n = b_.idle_clocks(p, limit);
     if (n > 0) {
       // EN and DIR hold through the stretch; PWM follows its counter.
@@ -19,10 +19,11 @@ class TwinBoard final : public BoardModel {
           const int32_t high = int32_t(b_.pwm_high_in(a, n));
           drive[a] += b_.dir(a) ? -high : high;
         }
-      advance(p, n);
+      advance(p, n, line);
       return n;
     }
     b_.step(p);
+    line.clock(b_.tx());
     ++stepped_;
     sp_high_ += b_.sp_pwm();
     // seg_wr_o and the word it writes, registered: the queue takes them at the next edge.
@@ -42,8 +43,9 @@ class TwinBoard final : public BoardModel {
     const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
     return b_.dir(a) ? -high : high;
   }
-  void advance(const IcebreakerPins& p, uint32_t n) override {
+  void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line) override {
     sp_high_ += b_.sp_high_in(n);
+    b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
     b_.advance(p, n);
   }
   bool sp_pwm() const override { return b_.sp_pwm(); }
@@ -81,7 +83,7 @@ class RtlBoard final : public BoardModel {
   }
   ~RtlBoard() override { top_->final(); }
 
-  uint32_t run(const IcebreakerPins& p, uint32_t /*limit*/, int32_t* drive) override {
+  uint32_t run(const IcebreakerPins& p, uint32_t /*limit*/, int32_t* drive, UartReceiver& line) override {
     Vmotioncore_icebreaker& t = *top_;
     if (!same(p, last_)) {
       write_all(p);
@@ -91,6 +93,7 @@ class RtlBoard final : public BoardModel {
     t.eval();
     t.CLK = 0;
     t.eval();
+    line.clock(t.TX);
     ++stepped_;
     // The executor's queue write and its word (mc_regs' seg_wr_o, seg_wdata_o = data).
     if (seg_tap_ && t.rootp->motioncore_icebreaker__DOT__u_board__DOT__seg_wr)

@@ -6,8 +6,8 @@
 // boards to each other).
 //
 //   auto b = make_board_model(BoardEngine::Twin, 0);
-//   n = b->run(pins, limit, drive);   // 1..limit clocks with the pins held
-//   b->tx();                          // the TX pin, held through those clocks
+//   n = b->run(pins, limit, drive, line);  // 1..limit clocks with the pins held,
+//                                          // TX after each into the receiver `line`
 #pragma once
 
 #include <cstdint>
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hls/motioncore_icebreaker.hpp"
+#include "sim/vboard/uart_model.hpp"
 #include "sim/vboard/virtual_board.hpp"
 
 namespace mc::sim {
@@ -23,11 +24,11 @@ class BoardModel {
  public:
   virtual ~BoardModel() = default;
   // At least one and at most `limit` clocks with the pins p held: one
-  // stepped clock, or a stretch in which nothing but counters change (TX,
-  // DRV_EN and DIR hold). drive[a] gains, per clock, +1 (-1 with DIR) after
-  // each edge that leaves axis a's bridge on (DRV_EN and PWM high). Returns
-  // the clocks done.
-  virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive) = 0;
+  // stepped clock, or a stretch in which nothing but counters and the bits
+  // of a byte on TX change (DRV_EN and DIR hold). drive[a] gains, per clock,
+  // +1 (-1 with DIR) after each edge that leaves axis a's bridge on (DRV_EN
+  // and PWM high); `line` takes TX after each clock. Returns the clocks done.
+  virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive, UartReceiver& line) = 0;
   // The output pins after the last edge.
   virtual bool tx() const = 0;
   virtual bool drv_en() const = 0;  // DRV_EN: every driver's enable
@@ -46,10 +47,11 @@ class BoardModel {
   // The twin's fast-forward over many plant steps (the RTL: none): how many
   // of the next clocks (up to limit) with the pins held change nothing but
   // counters; the drive of axis a over the clocks [from, from + n) of such a
-  // stretch (as run() counts it); advance(p, n) does n of them at once.
+  // stretch (as run() counts it); advance(p, n, line) does n of them at
+  // once, TX after each into `line`.
   virtual uint32_t idle_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/) { return 0; }
   virtual int32_t idle_drive(int /*axis*/, uint32_t /*from*/, uint32_t /*n*/) const { return 0; }
-  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/) {}
+  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/) {}
   // Clocks stepped one by one so far (the rest were skipped).
   uint64_t stepped() const { return stepped_; }
   // Appends to *words every word the command executor writes into the

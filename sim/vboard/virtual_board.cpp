@@ -252,10 +252,9 @@ struct VirtualBoard::Impl {
       pins.rx = tx.pin();
       const uint32_t steady = tx.steady();
       if (steady < hold) hold = steady + 1;
-      const uint32_t n = board->run(pins, hold, drive);
+      const uint32_t n = board->run(pins, hold, drive, rx);
       for (int a = 0; a < naxes; ++a)
         if (slot[a].stepper) slot[a].watch_step(board->pwm(a), board->dir(a));
-      rx.clock_n(board->tx(), n);
       tx.clock_n(n);
       c += n;
       watch_spindle(cycles + c);
@@ -271,7 +270,8 @@ struct VirtualBoard::Impl {
   // The twin's event loop: from a step boundary, the whole plant steps in
   // which the board only counts (the host line idle, no frame being worked
   // on, no PID tick or drive update, no interpolator iteration, no encoder
-  // edge to show) go by with the board advanced over them at once. The
+  // edge to show; a byte the board sends goes out bit by bit inside) go by
+  // with the board advanced over them at once. The
   // plants take every step with the drive the clock-by-clock path would
   // count (the PWM pins follow their counters): by runs of equal drive
   // where no switch can change (hold_plants), else one by one. Positions
@@ -283,8 +283,8 @@ struct VirtualBoard::Impl {
   // whose high clocks the board model counts). A handwheel edge ends the
   // stretch at the step boundary before it: plant_step() shows it at its
   // clock.
-  bool jump(uint64_t steps) {
-    if (!tx.idle() || rx.busy() || rx.has_byte() || !contacts_quiet()) return false;
+  bool jump(uint64_t steps, std::vector<uint8_t>& out) {
+    if (!tx.idle() || !contacts_quiet()) return false;
     if (const uint64_t e = next_wheel_edge(); e != kNever) steps = std::min(steps, (e - cycles) / k);
     if (steps == 0) return false;
     for (int a = 0; a < naxes; ++a)
@@ -309,9 +309,14 @@ struct VirtualBoard::Impl {
         ++j;
       }
     }
-    board->advance(pins, uint32_t(j * k));
-    rx.clock_n(board->tx(), uint32_t(j * k));
+    // A byte the board sends ends the stretch (the clock that ends it is
+    // stepped): its bits go by inside, and the stretch ends within a plant
+    // step of the receiver taking it, as plant_step() would hand it on.
+    const bool sending = rx.busy();
+    board->advance(pins, uint32_t(j * k), rx);
     cycles += j * k;
+    if (sending || rx.busy() || rx.has_byte()) last_activity = cycles;
+    while (rx.has_byte()) out.push_back(rx.take());
     return true;
   }
 
@@ -449,7 +454,7 @@ void VirtualBoard::run(uint64_t clocks, std::vector<uint8_t>& out, bool until_ou
   const size_t before = out.size();
   while (impl_->cycles < end && !(until_output && out.size() > before)) {
     const uint64_t steps = (end - impl_->cycles + impl_->k - 1) / impl_->k;
-    if (!impl_->jump(steps)) impl_->plant_step(out);
+    if (!impl_->jump(steps, out)) impl_->plant_step(out);
   }
 }
 uint64_t VirtualBoard::cycles() const {
