@@ -119,7 +119,20 @@ class McBoard {
     walk_ = 0;
     let_ = {};
     if (limit == 0 || in.rst) return 0;
-    uint32_t n = u_urx.quiet(in.rx, limit);
+    return quiet_but_rx(in, u_urx.quiet(in.rx, limit));
+  }
+  // The same inside a byte on RX, with the line's future known (rx(t):
+  // in.rx in the t-th clock from now): the stretch goes on through the
+  // byte's samples, up to its stop bit's. skip_line(n, rx) does it (not RTL).
+  template <typename Rx>
+  uint32_t quiet_line(const McBoardIn& in, uint32_t limit, Rx&& rx) {
+    walk_ = 0;
+    let_ = {};
+    if (limit == 0 || in.rst) return 0;
+    return quiet_but_rx(in, u_urx.quiet_line(rx, limit));
+  }
+  // quiet() after the receiver's n.
+  uint32_t quiet_but_rx(const McBoardIn& in, uint32_t n) {
     if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
     if (n == 0 || u_regs.r.xs != Regs::X_IDLE) return 0;
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
@@ -178,6 +191,15 @@ class McBoard {
     return 0;
   }
   void skip(uint32_t n) {
+    u_urx.skip(n);
+    skip_but_rx(n);
+  }
+  template <typename Rx>
+  void skip_line(uint32_t n, Rx&& rx) {
+    u_urx.skip_line(n, rx);
+    skip_but_rx(n);
+  }
+  void skip_but_rx(uint32_t n) {
     wired_ = false;
     if (walk_ > 0 && n >= walk_) {  // quiet() found a walk that ends in the stretch: its end
       u_regs = walked_;
@@ -194,7 +216,6 @@ class McBoard {
       }
       walk_ -= n;
     }
-    u_urx.skip(n);
     u_utx.skip(n);
     u_lrx.skip(n);
     u_ltx.skip(n);

@@ -99,6 +99,29 @@ class MotioncoreIcebreaker {
     u_board.skip(n);
     idle_ = pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
   }
+  // Inside a byte on RX, with the line's future known: line(t) is the RX
+  // pin in the t-th clock from now (line(0) == p.rx), every other pin held.
+  // The clocks (up to limit) in which nothing but counters, the receiver's
+  // bits and the synchronizer's RX stage move, up to the byte's stop bit;
+  // advance_line(p, n, line) does them (not RTL). 0 with the receiver
+  // idle: the pins held, idle_clocks() finds the stretch.
+  template <typename Line>
+  uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, Line&& line) {
+    constexpr uint8_t kRx = uint8_t(1u << (NS - 1));
+    const uint8_t in = sync_in(p);
+    if (rst() || !u_board.u_urx.busy || ((s1 ^ in) | (s2 ^ in)) & ~kRx) return 0;
+    return u_board.quiet_line(board_in(p), limit, synced(line));
+  }
+  template <typename Line>
+  void advance_line(const IcebreakerPins& p, uint32_t n, Line&& line) {
+    if (n == 0) return;
+    constexpr uint8_t kRx = uint8_t(1u << (NS - 1));
+    u_board.skip_line(n, synced(line));
+    const auto at = [&](uint32_t t) { return uint8_t((sync_in(p) & ~kRx) | (line(t) ? kRx : 0)); };
+    s2 = n >= 2 ? at(n - 2) : s1;
+    s1 = at(n - 1);
+    idle_ = 0;
+  }
 
   // TX after each of the next n clocks that advance(p, n) would do, as runs
   // (f(level, clocks), in order): a byte going out keeps the stretch going
@@ -157,6 +180,14 @@ class MotioncoreIcebreaker {
     b.hw_a = p.hw_a;
     b.hw_b = p.hw_b;
     return b;
+  }
+  // The receiver's input in the t-th clock from now: the synchronizer's
+  // stages, then the pin two clocks earlier.
+  template <typename Line>
+  auto synced(Line& line) const {
+    return [this, &line](uint32_t t) {
+      return t == 0 ? bool(s2 >> (NS - 1) & 1) : t == 1 ? bool(s1 >> (NS - 1) & 1) : bool(line(t - 2));
+    };
   }
   static uint32_t pins_word(const IcebreakerPins& p) {
     uint32_t w = uint32_t(p.rx) | uint32_t(p.btn_n) << 1 | uint32_t(p.estop) << 2 | uint32_t(p.hw_a) << 3 |

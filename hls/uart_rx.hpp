@@ -68,6 +68,32 @@ struct UartRx {
   void skip(uint32_t n) {
     if (busy) cnt -= n;
   }
+
+  // Inside a byte, with the line's future known: rx(t) is rx_i in the t-th
+  // clock from now. The clocks (up to limit) before the stop bit's sample
+  // (valid_o rises there), in which only the timer, the bit count and the
+  // shift register move; a start bit that did not last ends them at its
+  // sample. skip_line(n, rx) does them (not RTL).
+  template <typename Rx>
+  uint32_t quiet_line(Rx&& rx, uint32_t limit) const {
+    if (!busy || valid_o || ferr_o) return 0;
+    const uint32_t stop = cnt + uint32_t(9 - bitn) * uint32_t(DIV);
+    if (bitn == 0 && cnt < limit && rx(cnt)) return cnt;
+    return stop < limit ? stop : limit;
+  }
+  template <typename Rx>
+  void skip_line(uint32_t n, Rx&& rx) {
+    uint32_t t = cnt;  // the clock of the next sample
+    if (n <= t) {
+      cnt -= n;
+      return;
+    }
+    for (; t < n; t += uint32_t(DIV)) {
+      if (bitn != 0) sh = uint8_t(uint32_t(rx(t)) << 7 | sh >> 1);
+      bitn = uint8_t(bitn + 1);
+    }
+    cnt = FULL - (n - 1 - (t - uint32_t(DIV)));
+  }
 };
 
 }  // namespace mc

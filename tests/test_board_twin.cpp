@@ -1037,6 +1037,82 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
   EXPECT_GT(tx_bits, 0u);  // the host's replies are few here; RunEqualsSteps sees thousands
 }
 
+// The virtual board's host line ahead of time: pin_after(t) is pin() after t
+// clock() calls, through the byte on the line, the queued ones and idle.
+TEST(UartModel, PinAfterIsThePinThatManyClocksOn) {
+  std::mt19937_64 rng(77);
+  sim::UartSender tx(kCpb);
+  uint64_t checked = 0;
+  for (int round = 0; round < 300; ++round) {
+    if (rng() % 3 != 0)
+      for (uint64_t i = 0, n = rng() % 4; i < n; ++i) tx.send(uint8_t(rng()));
+    tx.clock_n(uint32_t(rng() % 200));
+    sim::UartSender later = tx;
+    for (uint32_t t = 0; t < 700; ++t) {
+      ASSERT_EQ(tx.pin_after(t), later.pin()) << "t " << t << ", round " << round;
+      later.clock();
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 300u * 700u);
+}
+
+// advance_line(p, n, line) over the bits of a byte on RX leaves exactly the
+// state of n step()s with the line's levels: a twin that runs every byte's
+// data bits at once against one that steps every clock, over good and bad
+// traffic (glitches, framing errors, breaks), the whole state compared after
+// each stretch.
+TEST(BoardTwin, LineAdvanceEqualsSteps) {
+  for (uint64_t seed : {601, 602}) {
+    std::mt19937_64 rng(seed);
+    Host host(seed, kLineErrors);
+    host.slow_pid();
+    PinGen pins(seed + 1, kIdle);
+    Twin ref, fast;
+    IcebreakerPins p;
+    std::deque<bool> ahead;  // the line's next levels, from the host's open-loop schedule
+    const auto line = [&](uint32_t t) {
+      while (ahead.size() <= t) ahead.push_back(host.line());
+      return bool(ahead[t]);
+    };
+    uint64_t clocks = 0, in_bytes = 0, advances = 0;
+    while (clocks < 1'500'000) {
+      p.rx = line(0);
+      const uint32_t limit = 1 + uint32_t(rng() % (rng() % 2 ? 40 : 2000));
+      const uint32_t k = fast.line_clocks(p, limit, line);
+      ASSERT_LE(k, limit);
+      if (k > 0) {
+        const uint32_t n = rng() % 4 ? k : 1 + uint32_t(rng() % k);  // the whole stretch, or part of it
+        fast.advance_line(p, n, line);
+        for (uint32_t i = 0; i < n; ++i) {
+          p.rx = line(0);
+          ahead.pop_front();
+          ref.step(p);
+        }
+        clocks += n;
+        in_bytes += n;
+        ++advances;
+        ASSERT_EQ(state_diff(ref, fast), "")
+            << "after " << n << " clocks of a byte at clock " << clocks << ", seed " << seed;
+      } else {
+        pins.clock(p);
+        p.rx = line(0);
+        ahead.pop_front();
+        ref.step(p);
+        fast.step(p);
+        ++clocks;
+        ASSERT_TRUE(same_pins(ref, fast)) << "clock " << clocks << ", seed " << seed;
+      }
+    }
+    ASSERT_EQ(state_diff(ref, fast), "");
+    std::printf("line advance (seed %llu): %llu clocks, %llu of them inside bytes in %llu advances\n",
+                (unsigned long long)seed, (unsigned long long)clocks, (unsigned long long)in_bytes,
+                (unsigned long long)advances);
+    EXPECT_GT(in_bytes, clocks / 10) << "seed " << seed;
+    EXPECT_GT(advances, 1000u) << "seed " << seed;
+  }
+}
+
 // run(p, n) is n step(p)s, whatever the state: the pins held as long as the
 // line keeps its level (at most a random stretch), as a plant's step holds them.
 TEST(BoardTwin, RunEqualsSteps) {

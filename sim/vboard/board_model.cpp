@@ -48,6 +48,14 @@ class TwinBoard final : public BoardModel {
     b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
     b_.advance(p, n);
   }
+  uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, const RxLine& rx) override {
+    return b_.line_clocks(p, limit, rx);
+  }
+  void advance_line(const IcebreakerPins& p, uint32_t n, const RxLine& rx, UartReceiver& line) override {
+    sp_high_ += b_.sp_high_in(n);
+    b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
+    b_.advance_line(p, n, rx);
+  }
   bool sp_pwm() const override { return b_.sp_pwm(); }
   bool sp_en() const override { return b_.sp_en(); }
   bool sp_dir() const override { return b_.sp_dir(); }

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -52,6 +53,16 @@ class BoardModel {
   virtual uint32_t idle_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/) { return 0; }
   virtual int32_t idle_drive(int /*axis*/, uint32_t /*from*/, uint32_t /*n*/) const { return 0; }
   virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/) {}
+  // The same inside a byte on RX, with the host's line ahead of time
+  // (rx(t): the RX pin in the t-th clock from now, the other pins held):
+  // the stretch goes on through the byte's bits (0 while RX is idle:
+  // idle_clocks() then).
+  using RxLine = std::function<bool(uint64_t)>;
+  virtual uint32_t line_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/, const RxLine& /*rx*/) {
+    return 0;
+  }
+  virtual void advance_line(const IcebreakerPins& /*p*/, uint32_t /*n*/, const RxLine& /*rx*/,
+                            UartReceiver& /*line*/) {}
   // Clocks stepped one by one so far (the rest were skipped).
   uint64_t stepped() const { return stepped_; }
   // Appends to *words every word the command executor writes into the

@@ -41,6 +41,19 @@ class UartSender {
     if (bit_ < 0) return q_.empty() ? UINT32_MAX : 0;
     return cnt_ == 0 ? 0 : uint32_t(cpb_ - cnt_);
   }
+  // pin() after t more clock() calls: the rest of the byte on the line,
+  // then the queued bytes back to back, then idle (high).
+  bool pin_after(uint64_t t) const {
+    if (t == 0) return level_;
+    if (bit_ < 0 && q_.empty()) return true;
+    // Bits from the start of the byte on the line (an idle line: from the
+    // end of one), the t-th call's bit among them.
+    const uint64_t b =
+        (bit_ < 0 ? 10 : uint64_t(bit_)) + (uint64_t(bit_ < 0 ? 0 : cnt_) + t - 1) / uint64_t(cpb_);
+    if (b <= 9) return bit_level(cur_, int(b));
+    const uint64_t k = (b - 10) / 10;
+    return k < q_.size() ? bit_level(q_[size_t(k)], int((b - 10) % 10)) : true;
+  }
   // n clock() calls; inside a bit only the counter moves.
   void clock_n(uint32_t n) {
     while (n > 0) {
@@ -64,8 +77,7 @@ class UartSender {
       bit_ = 0;
       cnt_ = 0;
     }
-    // Bit 0 start, 1..8 data LSB first, 9 stop.
-    level_ = bit_ == 0 ? false : bit_ == 9 ? true : ((cur_ >> (bit_ - 1)) & 1);
+    level_ = bit_level(cur_, bit_);
     if (++cnt_ == cpb_) {
       cnt_ = 0;
       if (++bit_ == 10) bit_ = -1;
@@ -73,6 +85,11 @@ class UartSender {
   }
 
  private:
+  // Bit 0 start, 1..8 data LSB first, 9 stop.
+  static bool bit_level(uint8_t byte, int bit) {
+    return bit == 0 ? false : bit == 9 ? true : ((byte >> (bit - 1)) & 1);
+  }
+
   int cpb_;
   std::deque<uint8_t> q_;
   uint8_t cur_ = 0;

@@ -195,6 +195,7 @@ struct VirtualBoard::Impl {
     return t.start + (t.done + 1) * t.span / n;
   }
   void show_wheel(uint64_t now) {
+    if (next_wheel_edge() > now) return;  // the pins show the count already
     while (next_wheel_edge() <= now) {
       Turn& t = turns.front();
       wheel += t.edges < 0 ? -1 : 1;
@@ -268,10 +269,11 @@ struct VirtualBoard::Impl {
   }
 
   // The twin's event loop: from a step boundary, the whole plant steps in
-  // which the board only counts (the host line idle, no frame being worked
-  // on, no PID tick or drive update, no interpolator iteration, no encoder
-  // edge to show; a byte the board sends goes out bit by bit inside) go by
-  // with the board advanced over them at once. The
+  // which the board only counts (no frame being worked on, no PID tick or
+  // drive update, no interpolator iteration, no encoder edge to show; a
+  // byte the board sends goes out bit by bit inside, and the data bits of
+  // one the host sends come in, the line being known ahead) go by with the
+  // board advanced over them at once. The
   // plants take every step with the drive the clock-by-clock path would
   // count (the PWM pins follow their counters): by runs of equal drive
   // where no switch can change (hold_plants), else one by one. Positions
@@ -284,13 +286,18 @@ struct VirtualBoard::Impl {
   // stretch at the step boundary before it: plant_step() shows it at its
   // clock.
   bool jump(uint64_t steps, std::vector<uint8_t>& out) {
-    if (!tx.idle() || !contacts_quiet()) return false;
+    if (!contacts_quiet()) return false;
     if (const uint64_t e = next_wheel_edge(); e != kNever) steps = std::min(steps, (e - cycles) / k);
     if (steps == 0) return false;
     for (int a = 0; a < naxes; ++a)
       if (slot[a].encoder_count() != slot[a].shown) return false;
     pins.rx = tx.pin();
-    const uint64_t most = board->idle_clocks(pins, uint32_t(std::min<uint64_t>(steps * k, 1u << 30))) / k;
+    // Host bytes on RX: the stretch runs through the bits of the one the
+    // board is taking (the line is known ahead: tx.pin_after).
+    const bool hosting = !tx.idle();
+    const uint32_t limit = uint32_t(std::min<uint64_t>(steps * k, 1u << 30));
+    const uint64_t most =
+        (hosting ? board->line_clocks(pins, limit, host_line) : board->idle_clocks(pins, limit)) / k;
     if (most == 0) return false;
     uint64_t j = 0;
     if (contacts_clear()) {
@@ -313,9 +320,14 @@ struct VirtualBoard::Impl {
     // stepped): its bits go by inside, and the stretch ends within a plant
     // step of the receiver taking it, as plant_step() would hand it on.
     const bool sending = rx.busy();
-    board->advance(pins, uint32_t(j * k), rx);
+    if (hosting) {
+      board->advance_line(pins, uint32_t(j * k), host_line, rx);
+      tx.clock_n(uint32_t(j * k));
+    } else {
+      board->advance(pins, uint32_t(j * k), rx);
+    }
     cycles += j * k;
-    if (sending || rx.busy() || rx.has_byte()) last_activity = cycles;
+    if (hosting || sending || rx.busy() || rx.has_byte()) last_activity = cycles;
     while (rx.has_byte()) out.push_back(rx.take());
     return true;
   }
@@ -412,6 +424,8 @@ struct VirtualBoard::Impl {
   int naxes = 0;
   UartSender tx;
   UartReceiver rx;
+  // The host's line ahead of time, for the board's stretches through a byte.
+  const BoardModel::RxLine host_line = [this](uint64_t t) { return tx.pin_after(t); };
   uint64_t cycles = 0, last_activity = 0;
   uint64_t held_steps = 0;  // held_steps()
   // The switches: each home switch on its axis's limit pin, the probe.
