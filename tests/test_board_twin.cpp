@@ -975,6 +975,19 @@ bool same_pins(const Twin& x, const Twin& y) {
 // Quiet stretches: long pauses on the line, encoders mostly still.
 constexpr Profile kIdle{"idle", 80, 10, 5, 3, 12, 2, 1, 1, 1, 1, 1, 30'000, 6, 300'000, 85, 5, 8, 20};
 
+// A host's traffic on a board with a machine's PID period and pins that
+// move: the reference twin steps every clock, the fast one skips.
+struct Rig {
+  Rig(uint64_t seed, const Profile& traffic) : rng(seed), host(seed, traffic), pins(seed + 1, kIdle) {
+    host.slow_pid();
+  }
+  std::mt19937_64 rng;
+  Host host;
+  PinGen pins;
+  Twin ref, fast;
+  IcebreakerPins p;
+};
+
 // advance(n) over random states leaves exactly the state of n step()s: a twin
 // that skips every idle stretch it can against one that steps every clock,
 // the whole state compared after each skip, the pins every stepped clock and
@@ -982,12 +995,8 @@ constexpr Profile kIdle{"idle", 80, 10, 5, 3, 12, 2, 1, 1, 1, 1, 1, 30'000, 6, 3
 TEST(BoardTwin, AdvanceEqualsSteps) {
   uint64_t all_skips = 0, tx_bits = 0;  // tx_bits: TX edges inside advances
   for (uint64_t seed : {401, 402, 403}) {
-    std::mt19937_64 rng(seed);
-    Host host(seed, kIdle);
-    host.slow_pid();
-    PinGen pins(seed + 1, kIdle);
-    Twin ref, fast;
-    IcebreakerPins p;
+    Rig rig(seed, kIdle);
+    auto& [rng, host, pins, ref, fast, p] = rig;
     uint64_t clocks = 0, skipped = 0, skips = 0;
     while (clocks < 1'500'000) {
       p.rx = host.line();
@@ -1064,12 +1073,8 @@ TEST(UartModel, PinAfterIsThePinThatManyClocksOn) {
 // each stretch.
 TEST(BoardTwin, LineAdvanceEqualsSteps) {
   for (uint64_t seed : {601, 602}) {
-    std::mt19937_64 rng(seed);
-    Host host(seed, kLineErrors);
-    host.slow_pid();
-    PinGen pins(seed + 1, kIdle);
-    Twin ref, fast;
-    IcebreakerPins p;
+    Rig rig(seed, kLineErrors);
+    auto& [rng, host, pins, ref, fast, p] = rig;
     std::deque<bool> ahead;  // the line's next levels, from the host's open-loop schedule
     const auto line = [&](uint32_t t) {
       while (ahead.size() <= t) ahead.push_back(host.line());
@@ -1117,12 +1122,8 @@ TEST(BoardTwin, LineAdvanceEqualsSteps) {
 // line keeps its level (at most a random stretch), as a plant's step holds them.
 TEST(BoardTwin, RunEqualsSteps) {
   const uint64_t seed = 501;
-  std::mt19937_64 rng(seed);
-  Host host(seed, kCommands);
-  host.slow_pid();
-  PinGen pins(seed + 1, kIdle);
-  Twin ref, fast;
-  IcebreakerPins p;
+  Rig rig(seed, kCommands);
+  auto& [rng, host, pins, ref, fast, p] = rig;
   uint64_t clocks = 0, skipped = 0;
   std::vector<bool> line;        // TX after each clock of the stretch, as run() tells it
   std::vector<uint32_t> run_of;  // the length of the run each clock came in
