@@ -109,6 +109,7 @@ class MotioncoreIcebreaker {
   uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, Line&& line) {
     constexpr uint8_t kRx = uint8_t(1u << (NS - 1));
     const uint8_t in = sync_in(p);
+    idle_ = 0;  // quiet_line() leaves the board's fast-forward state for its own stretch
     if (rst() || !u_board.u_urx.busy || ((s1 ^ in) | (s2 ^ in)) & ~kRx) return 0;
     return u_board.quiet_line(board_in(p), limit, synced(line));
   }

@@ -36,9 +36,11 @@ struct Session {
 // Gains on X and Y, armed, a diagonal move at the machine's feed with
 // telemetry streaming, then the positions and counters read back. The
 // table's Z at z_m: 0 on the workpiece's face (the probe touching), or
-// clear of it (the twin then runs the plants by held runs).
-Session session(sim::BoardEngine e, double z_m = 0) {
-  const machine::MachineConfig m = machine::default_machine();
+// clear of it (the twin then runs the plants by held runs). A plant step of
+// clocks_per_step clocks (0: the machine's).
+Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0) {
+  machine::MachineConfig m = machine::default_machine();
+  if (clocks_per_step != 0) m.plant_dt_s = clocks_per_step / m.clock_hz;
   sim::VirtualBoard board(m, 0, e);
   board.start_at(2, z_m);
   sim::BoardStream s(board, true);
@@ -119,6 +121,16 @@ TEST(VBoard, HeldPlantRunsGiveTheStepsTheRtlTakes) {
   const Session rtl = session(sim::BoardEngine::Rtl, 0.002);
   EXPECT_GT(twin.held, twin.cycles / 12 / 5) << "the plants ran by holds in under a fifth of the steps";
   EXPECT_EQ(rtl.held, 0u);
+  expect_same(twin, rtl);
+}
+
+// Plant steps of 4 clocks, shorter than the half bit by which the board's
+// stretch may outlast the byte its receiver takes: each TX byte still comes
+// out in the step the RTL's does.
+TEST(VBoard, ShortPlantStepsGiveTheBytesInTheRtlsSteps) {
+  const Session twin = session(sim::BoardEngine::Twin, 0.002, 4);
+  const Session rtl = session(sim::BoardEngine::Rtl, 0.002, 4);
+  EXPECT_GT(twin.tx.size(), 2000u);
   expect_same(twin, rtl);
 }
 

@@ -151,6 +151,11 @@ class UartReceiver {
     return b;
   }
   bool busy() const { return bit_ >= 0; }
+  // Inside a byte: the clock() calls up to the one that takes it (its stop
+  // bit's sample, which also finds a framing error).
+  uint64_t clocks_to_byte() const {
+    return busy() ? uint64_t(cnt_) + uint64_t(9 - bit_) * uint64_t(cpb_) : 0;
+  }
   uint64_t framing_errors() const { return framing_errors_; }
 
  private:

@@ -296,8 +296,13 @@ struct VirtualBoard::Impl {
     // board is taking (the line is known ahead: tx.pin_after).
     const bool hosting = !tx.idle();
     const uint32_t limit = uint32_t(std::min<uint64_t>(steps * k, 1u << 30));
-    const uint64_t most =
+    uint64_t most =
         (hosting ? board->line_clocks(pins, limit, host_line) : board->idle_clocks(pins, limit)) / k;
+    // A byte the board sends goes by inside; the receiver takes it in the
+    // jump's last step at the latest, as plant_step() would hand it on then
+    // (the board's stretch may run a few clocks past it: more than a step
+    // when a step is that short).
+    if (rx.busy()) most = std::min(most, (rx.clocks_to_byte() + k - 1) / k);
     if (most == 0) return false;
     uint64_t j = 0;
     if (contacts_clear()) {
@@ -316,9 +321,6 @@ struct VirtualBoard::Impl {
         ++j;
       }
     }
-    // A byte the board sends ends the stretch (the clock that ends it is
-    // stepped): its bits go by inside, and the stretch ends within a plant
-    // step of the receiver taking it, as plant_step() would hand it on.
     const bool sending = rx.busy();
     if (hosting) {
       board->advance_line(pins, uint32_t(j * k), host_line, rx);
@@ -616,7 +618,12 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   // most that late, well inside the protocol's 1 ms byte timeout.
   const uint64_t slice = std::max<uint64_t>(1, uint64_t(std::llround(100e-6 * board.clock_hz())));
   const double period_s = double(slice) / board.clock_hz();
-  constexpr double kLead = 4e-3;
+  // Paced, the board runs ahead of the wall clock by up to kLead; by up to
+  // kLeadHost for a millisecond of board time after host bytes were on its
+  // line, so that a frame the host writes in pieces reaches the board with
+  // gaps within half a millisecond of the host's own, as its byte timeout
+  // (1 ms) expects.
+  constexpr double kLead = 4e-3, kLeadHost = 1e-3;
   const int fd = pty.master_fd();
   const auto t0 = Clock::now();
   auto last_host = t0;
@@ -633,6 +640,16 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
   constexpr size_t kPacket = 62;
   const uint64_t latency = uint64_t(std::llround(1e-3 * board.clock_hz()));
   uint64_t out_since = 0;
+  uint64_t host_at = 0;  // the board clock at which host bytes were last on RX
+  const auto flush = [&] {
+    if (out.empty()) return;
+    const ssize_t n = ::write(fd, out.data(), out.size());
+    const size_t sent = n > 0 ? size_t(n) : 0;
+    st.bytes_out += sent;
+    st.bytes_dropped += out.size() - sent;
+    answered = answered || (asked && sent > 0);
+    out.clear();
+  };
 
   const auto report = [&](bool force) {
     st.wall_s = seconds_since(t0);
@@ -669,19 +686,14 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     const size_t had = out.size();
     board.run(slice, out);
     if (had == 0 && !out.empty()) out_since = board.cycles();
+    if (board.rx_backlog() > 0) host_at = board.cycles();
     // The board's USB bridge (the FT2232H) ships TX bytes in packets: when a
     // packet's worth has gathered or its latency timer runs out. An answer
     // goes as soon as the line falls quiet after it. Each write to the
     // terminal costs the kernel more than the board's 100 us of bytes.
-    if (!out.empty() && (out.size() >= kPacket || board.cycles() - out_since >= latency ||
-                         board.link_quiet_clocks() >= quiet_line)) {
-      const ssize_t n = ::write(fd, out.data(), out.size());
-      const size_t sent = n > 0 ? size_t(n) : 0;
-      st.bytes_out += sent;
-      st.bytes_dropped += out.size() - sent;
-      answered = answered || (asked && sent > 0);
-      out.clear();
-    }
+    if (out.size() >= kPacket || board.cycles() - out_since >= latency ||
+        board.link_quiet_clocks() >= quiet_line)
+      flush();
     if (!opt.paced && opt.host_wait_s > 0 && answered && board.link_quiet_clocks() >= quiet_line) {
       // The board answered and the line went quiet: the host's next request
       // comes after its own reaction time, which is wall time. Running on
@@ -704,9 +716,11 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
       // wake-up, a few milliseconds in which the OS runs something else or
       // a burst of work for the model (the host filling the segment queue)
       // eats into the lead instead of making periods late. A host byte
-      // ends the sleep.
-      if (ahead > kLead) {
-        const double wait = ahead - kLead / 2;
+      // ends the sleep; the bytes for the host go before it.
+      const double lead = board.cycles() - host_at < latency ? kLeadHost : kLead;
+      if (ahead > lead) {
+        flush();
+        const double wait = ahead - lead / 2;
         const timespec ts{time_t(wait), long((wait - std::floor(wait)) * 1e9)};
         ::ppoll(fds, 2, &ts, nullptr);
       }
@@ -730,6 +744,7 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     if (opt.idle_exit_s > 0 && seconds_since(last_host) > opt.idle_exit_s) break;
     report(false);
   }
+  flush();
   st.wall_s = seconds_since(t0);
   st.board_s = board.board_seconds();
   st.run_wall_s = st.wall_s - paused_s;
