@@ -667,6 +667,7 @@ ServeStatus serve(VirtualBoard& board, Pty& pty, const ServeOptions& opt, const 
     if (n <= 0) return false;
     board.send(buf, size_t(n));
     st.bytes_in += uint64_t(n);
+    host_at = board.cycles();  // a short request may be on the line for less than a slice
     last_host = Clock::now();
     asked = true;
     answered = false;
