@@ -115,25 +115,20 @@ class McBoard {
   // no frame being worked on, no sample due, the decoders settled, no
   // fault. skip(n) then does n of them at once, leaving exactly the state of
   // n clocks; 0 means clock() this one.
-  uint32_t quiet(const McBoardIn& in, uint32_t limit) {
-    walk_ = 0;
-    let_ = {};
-    if (limit == 0 || in.rst) return 0;
-    return quiet_but_rx(in, u_urx.quiet(in.rx, limit));
-  }
+  uint32_t quiet(const McBoardIn& in, uint32_t limit) { return quiet_but_rx(in, u_urx.quiet(in.rx, limit)); }
   // The same inside a byte on RX, with the line's future known (rx(t):
   // in.rx in the t-th clock from now): the stretch goes on through the
   // byte's samples, up to its stop bit's. skip_line(n, rx) does it (not RTL).
   template <typename Rx>
   uint32_t quiet_line(const McBoardIn& in, uint32_t limit, Rx&& rx) {
-    walk_ = 0;
-    let_ = {};
-    if (limit == 0 || in.rst) return 0;
     return quiet_but_rx(in, u_urx.quiet_line(rx, limit));
   }
-  // quiet() after the receiver's n.
+  // quiet() after the receiver's n (0 for a limit of 0).
   uint32_t quiet_but_rx(const McBoardIn& in, uint32_t n) {
-    if (n != 0) n = u_utx.quiet(u_ltx.valid_o, n);
+    walk_ = 0;
+    let_ = {};
+    if (n == 0 || in.rst) return 0;
+    n = u_utx.quiet(u_ltx.valid_o, n);
     if (n == 0 || u_regs.r.xs != Regs::X_IDLE) return 0;
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
     Wires& w = w_;

@@ -107,7 +107,6 @@ class MotioncoreIcebreaker {
   // idle: the pins held, idle_clocks() finds the stretch.
   template <typename Line>
   uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, Line&& line) {
-    constexpr uint8_t kRx = uint8_t(1u << (NS - 1));
     const uint8_t in = sync_in(p);
     idle_ = 0;  // quiet_line() leaves the board's fast-forward state for its own stretch
     if (rst() || !u_board.u_urx.busy || ((s1 ^ in) | (s2 ^ in)) & ~kRx) return 0;
@@ -116,7 +115,6 @@ class MotioncoreIcebreaker {
   template <typename Line>
   void advance_line(const IcebreakerPins& p, uint32_t n, Line&& line) {
     if (n == 0) return;
-    constexpr uint8_t kRx = uint8_t(1u << (NS - 1));
     u_board.skip_line(n, synced(line));
     const auto at = [&](uint32_t t) { return uint8_t((sync_in(p) & ~kRx) | (line(t) ? kRx : 0)); };
     s2 = n >= 2 ? at(n - 2) : s1;
@@ -182,12 +180,13 @@ class MotioncoreIcebreaker {
     b.hw_b = p.hw_b;
     return b;
   }
+  static constexpr uint8_t kRx = uint8_t(1u << (NS - 1));  // RX's bit in the synchronizers
   // The receiver's input in the t-th clock from now: the synchronizer's
   // stages, then the pin two clocks earlier.
   template <typename Line>
   auto synced(Line& line) const {
     return [this, &line](uint32_t t) {
-      return t == 0 ? bool(s2 >> (NS - 1) & 1) : t == 1 ? bool(s1 >> (NS - 1) & 1) : bool(line(t - 2));
+      return t == 0 ? bool(s2 & kRx) : t == 1 ? bool(s1 & kRx) : bool(line(t - 2));
     };
   }
   static uint32_t pins_word(const IcebreakerPins& p) {

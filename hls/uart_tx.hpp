@@ -59,8 +59,9 @@ struct UartTx {
     return rest < limit ? rest : limit;
   }
   void skip(uint32_t n) {
-    if (!busy || n <= cnt) {
-      if (busy) cnt -= n;
+    if (!busy) return;
+    if (n <= cnt) {
+      cnt -= n;
       return;
     }
     // The bit on the line ends after cnt + 1 clocks, each next one DIV later.

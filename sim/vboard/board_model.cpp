@@ -33,7 +33,6 @@ class TwinBoard final : public BoardModel {
       if (b_.drv_en() && b_.pwm(a)) drive[a] += b_.dir(a) ? -1 : 1;
     return 1;
   }
-  bool tx() const override { return b_.tx(); }
   bool drv_en() const override { return b_.drv_en(); }
   bool pwm(int a) const override { return b_.pwm(a); }
   bool dir(int a) const override { return b_.dir(a); }
@@ -44,16 +43,14 @@ class TwinBoard final : public BoardModel {
     return b_.dir(a) ? -high : high;
   }
   void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line) override {
-    sp_high_ += b_.sp_high_in(n);
-    b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
+    before_stretch(n, line);
     b_.advance(p, n);
   }
   uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, const RxLine& rx) override {
     return b_.line_clocks(p, limit, rx);
   }
   void advance_line(const IcebreakerPins& p, uint32_t n, const RxLine& rx, UartReceiver& line) override {
-    sp_high_ += b_.sp_high_in(n);
-    b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
+    before_stretch(n, line);
     b_.advance_line(p, n, rx);
   }
   bool sp_pwm() const override { return b_.sp_pwm(); }
@@ -62,6 +59,12 @@ class TwinBoard final : public BoardModel {
   bool flood() const override { return b_.flood(); }
 
  private:
+  // What the n clocks of a stretch show before the board does them: SP_PWM's
+  // high clocks, and TX after each into `line`.
+  void before_stretch(uint32_t n, UartReceiver& line) {
+    sp_high_ += b_.sp_high_in(n);
+    b_.tx_levels(n, [&](bool level, uint32_t clocks) { line.clock_n(level, clocks); });
+  }
   // Built as the Verilated top is (sim/vboard/CMakeLists.txt): a step
   // generator on every axis, STEP_CFG choosing which axes use it.
   MotioncoreIcebreaker<kBoardAxes, 12'000'000, 1'000'000, true, MC_VBOARD_STEPPERS> b_;
@@ -111,7 +114,6 @@ class RtlBoard final : public BoardModel {
     sp_high_ += t.SP_PWM;
     return 1;
   }
-  bool tx() const override { return top_->TX; }
   bool sp_pwm() const override { return top_->SP_PWM; }
   bool sp_en() const override { return top_->SP_EN; }
   bool sp_dir() const override { return top_->SP_DIR; }

@@ -30,8 +30,7 @@ class BoardModel {
   // +1 (-1 with DIR) after each edge that leaves axis a's bridge on (DRV_EN
   // and PWM high); `line` takes TX after each clock. Returns the clocks done.
   virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive, UartReceiver& line) = 0;
-  // The output pins after the last edge.
-  virtual bool tx() const = 0;
+  // The output pins after the last edge (TX: into run()'s `line`).
   virtual bool drv_en() const = 0;  // DRV_EN: every driver's enable
   // An axis's PWM (STEP on a stepper axis) and DIR pins.
   virtual bool pwm(int axis) const = 0;
