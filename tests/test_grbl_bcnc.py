@@ -33,7 +33,10 @@ if mode not in ("--dry-run", "--sim"):
 work = tempfile.mkdtemp(prefix="mc_bcnc_")
 if mode == "--sim":
     os.environ["XDG_RUNTIME_DIR"] = work  # a virtual board of our own
-END_TOLERANCE = 0.005  # mm: the servo's in-position band (2 counts) on --sim; exact on --dry-run
+# mm: the servo's in-position band (2 counts) on --sim; exact on --dry-run. The
+# slack absorbs the float subtraction: 12.505 - 12.5 is 0.0050000000000008, and a
+# position exactly 2 counts off is inside the band.
+END_TOLERANCE = 0.005 + 1e-9
 os.environ["HOME"] = work  # bCNC reads and writes ~/.bCNC
 sys.path[:0] = [BCNC, BCNC + "/lib", BCNC + "/plugins", BCNC + "/controllers"]
 
