@@ -145,11 +145,13 @@ class McBoard {
     // A running segment may go on inside the stretch while its command
     // reaches nothing but the PID's next tick: no step generator armed.
     const bool busy = u_core.interp().state() == Core::Interp::ST_RUN && u_step.following(w.step);
-    // No tick, drive update or done in the n clocks (nor, unless busy, an
-    // iteration).
-    const uint32_t t = busy ? u_core.quiet_limit_busy() : u_core.quiet_limit();
+    // The sweep's drive updates may come inside unless the register file
+    // reads a drive command back (its read pipeline follows it).
+    let_ = typename Core::Let{walking, busy, true, !u_regs.reads_drive()};
+    // No tick or done in the n clocks (nor a drive update, unless let_.drive;
+    // nor, unless busy, an iteration).
+    const uint32_t t = u_core.quiet_limit_as(let_);
     if (t < n) n = t;
-    let_ = typename Core::Let{walking, busy};
     if (n == 0 || !u_core.quiet_as(core_in_, n, let_)) return 0;
     if (!u_io.quiet(w.io) || !u_step.quiet(w.step)) return 0;
     if constexpr (HANDWHEEL)
@@ -189,6 +191,18 @@ class McBoard {
     u_urx.skip(n);
     skip_but_rx(n);
   }
+  // Over the pins after edges from .. from + n - 1 of the stretch quiet()
+  // found (before skip()): axis a's PWM (STEP) pin high, counted -1 with
+  // DIR set, else +1. A stepper's pins hold; a servo's drive takes the
+  // sweep's update at drive_change(a) (Core::drive_change; kNoChange: none).
+  int32_t drive_in(int a, uint32_t from, uint32_t n) const {
+    if (u_step.stepper >> a & 1) return pwm_o(a) ? (dir_o(a) ? -int32_t(n) : int32_t(n)) : 0;
+    return u_core.drive_in(core_in_, a, from, n);
+  }
+  uint32_t drive_change(int a) const {
+    if ((u_step.stepper >> a & 1) || !let_.drive) return Core::kNoChange;
+    return u_core.drive_change(core_in_, a);
+  }
   template <typename Rx>
   void skip_line(uint32_t n, Rx&& rx) {
     u_urx.skip_line(n, rx);
@@ -219,13 +233,13 @@ class McBoard {
       // quiet() found at least n clocks before the segment's end. The step
       // generators take the command their last clock showed: after all
       // edges but the last.
-      if (n > 1) u_core.skip_as(n - 1, let_);
+      if (n > 1) u_core.skip_as(core_in_, n - 1, let_);
       uint8_t cmd = 0;
       for (int a = 0; a < NAXES; ++a) cmd = uint8_t(cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
-      u_core.skip_as(1, let_);
+      u_core.skip_as(core_in_, 1, let_);
       u_step.follow(cmd);
     } else {
-      u_core.skip_as(n, let_);
+      u_core.skip_as(core_in_, n, let_);
     }
     u_io.skip(n, u_safety.armed_o);
     if constexpr (HANDWHEEL) u_hw.skip(n);

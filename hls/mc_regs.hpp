@@ -615,6 +615,11 @@ class McRegs {
            r.sq == shadow[r.sa];
   }
 
+  // The read pipeline follows an axis's drive command: the register being
+  // read, or the one addressed, is an AX_DRV.
+  bool reads_drive() const { return is_drv(r.addr) || is_drv(r.ra); }
+  static constexpr bool is_drv(uint16_t a) { return (a >> 9 & 1) && (a & 0xF) == board::reg::AX_DRV; }
+
   // This walk sends no telemetry: none due for the sample it will read,
   // and none being written. (McBoard::walk_clocks would find that too, on a
   // copy of the register file; this refuses it before the copy.)

@@ -240,6 +240,17 @@ class MotionCore {
     bool port = false;
     // A running segment: its position moves, which the PID reads at a tick.
     bool busy = false;
+    // Decoders working through an edge: with their pins held, each steps
+    // until it settles, its count moving (read by the PID at a tick) and
+    // nothing a reader sees between ticks (QuadDecoder::settle_clocks). The
+    // skip needs the inputs quiet_as() was given.
+    bool settle = false;
+    // The sweep's drive updates: each axis's drive command takes the
+    // sample's output at its clock (drv_clock), the drive value and pins
+    // follow a clock and two later; drive_in() gives the pins over the
+    // stretch, drive_change() where they change. Done and the tick stay
+    // out (quiet_limit_as).
+    bool drive = false;
   };
   bool quiet_as(const In& in, uint32_t n, Let let) const {
     return quiet_but_interp(in, n, let) && interp_quiet(in, n, let.busy);
@@ -247,12 +258,12 @@ class MotionCore {
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a
   // copy tells how far that is).
-  void skip_as(uint32_t n, Let let) {
+  void skip_as(const In& in, uint32_t n, Let let) {
     if (let.busy && ip_.state() == InterpCore<FIFO_AW>::ST_RUN)
       ip_.run_to_end(n);
     else
       skip_interp(n);
-    skip_others(n);
+    skip_others(n, &in, let);
   }
   void read_port(uint8_t raddr) { r_.smp_rdata = read_bank(raddr); }
   uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
@@ -262,53 +273,76 @@ class MotionCore {
   // that would end the segment, and returns how many it did; its last clock
   // does not move the position (InterpCore::run_for); moved(i): the i-th
   // clock moved it.
-  bool quiet_busy(const In& in, uint32_t n) const { return quiet_as(in, n, Let{false, true}); }
+  // Decoders may be settling an edge meanwhile (Let::settle).
+  bool quiet_busy(const In& in, uint32_t n) const { return quiet_as(in, n, Let{false, true, true}); }
   template <typename Moved>
-  uint32_t skip_busy(uint32_t n, Moved&& moved) {
+  uint32_t skip_busy(const In& in, uint32_t n, Moved&& moved) {
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
       n = ip_.run_for(n, moved);
       if (n == 0) return 0;
     } else {
       skip_interp(n);
     }
-    skip_others(n);
+    skip_others(n, &in, Let{false, true, true});
     return n;
   }
-  uint32_t skip_busy(uint32_t n) {
-    return skip_busy(n, [](uint32_t) {});
+  uint32_t skip_busy(const In& in, uint32_t n) {
+    return skip_busy(in, n, [](uint32_t) {});
   }
 
   void skip(uint32_t n) {
     skip_interp(n);
-    skip_others(n);
+    skip_others(n, nullptr, Let{});
   }
   // The most clocks the sample timer and the sweep allow quiet(): up to the
   // next tick, drive update or done.
-  uint32_t quiet_limit() const {
-    uint32_t l = quiet_limit_busy();
-    // A running interpolator: up to its next iteration (with no input).
-    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) l = std::min(l, ip_.run_quiet(InterpIn{}));
-    return l;
-  }
+  // A running interpolator: up to its next iteration (with no input).
+  uint32_t quiet_limit() const { return quiet_limit_as(Let{}); }
   // The same, for quiet_busy().
-  uint32_t quiet_limit_busy() const {
+  uint32_t quiet_limit_busy() const { return quiet_limit_as(Let{false, true}); }
+  // The same, for quiet_as(.., let): drive updates bound it unless
+  // let.drive, the next iteration unless let.busy.
+  uint32_t quiet_limit_as(Let let) const {
     uint32_t l = pid_.quiet_limit();
     const int s = pid_.sweep_clock();
-    if (s != 0)
+    if (s != 0 && !let.drive)
       for (int a = 0; a < NAXES; ++a)
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < l) l = uint32_t(drv_clock(a) - s);
+    if (!let.busy && ip_.state() == InterpCore<FIFO_AW>::ST_RUN) l = std::min(l, ip_.run_quiet(InterpIn{}));
     return l;
   }
   // A word of the published sample (what smp_raddr would read).
   int32_t sample(int a, SampleField f) const { return bank_[r_.pb][a][f]; }
   // The PWM counter's value in the current clock.
   uint32_t pwm_count() const { return r_.pcnt; }
-  // Of the n edges skip(n) would do, after how many axis a's PWM pin is
-  // high: the counter runs on while the drive value holds, so the count
-  // follows from the duty and the counter's phase (a host that integrates
-  // the drive over a skipped stretch needs it; not RTL).
-  uint32_t pwm_high_in(int a, uint32_t n) const {
-    return uint32_t(pwm_high_count(r_.pcnt, duty(r_.drv_u[a]), pwm_mask + 1, n));
+  // Axis a's PWM pin after edges from .. from + n - 1 of a stretch that
+  // quiet_as(in, .., let) allowed, each high pin counted -1 when DIR is set
+  // with it, else +1 (what an H-bridge drives): the counter runs on, so the
+  // count follows from the duty and the counter's phase (a host that
+  // integrates the drive over a skipped stretch needs it; not RTL). The pin
+  // after edge t is duty(u) > the counter in clock t and DIR is u < 0, u
+  // the drive command then (zero unless allowed); with let.drive the
+  // sweep's update comes in from drive_change() on.
+  int32_t drive_in(const In& in, int a, uint32_t from, uint32_t n) const {
+    const uint32_t at = drive_change(in, a), end = from + n;
+    const uint32_t split = std::clamp(at, from, end);
+    const auto piece = [&](int16_t u, uint32_t t0, uint32_t len) {
+      const int32_t high = int32_t(pwm_high_count((r_.pcnt + t0) & pwm_mask, duty(u), pwm_mask + 1, len));
+      return u < 0 ? -high : high;
+    };
+    const int16_t now = u_sel(r_, in, a);
+    if (split == end) return piece(now, from, n);
+    return piece(now, from, split - from) +
+           piece(in.drv_allow[a] ? update(a) : int16_t(0), split, end - split);
+  }
+  // The first edge of the stretch whose pin the sweep's drive update sets
+  // (its clock's edge is the update, the next the drive value's), or
+  // kNoChange.
+  static constexpr uint32_t kNoChange = ~0u;
+  uint32_t drive_change(const In& in, int a) const {
+    const int s = pid_.sweep_clock();
+    if (s == 0 || drv_clock(a) < s || in.drv_ovr[a]) return kNoChange;
+    return uint32_t(drv_clock(a) - s) + 1;
   }
 
   const Pid& pid() const { return pid_; }
@@ -352,7 +386,8 @@ class MotionCore {
   }
   bool quiet_but_interp(const In& in, uint32_t n, Let let) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
-    if (pid_.sweep_clock() != 0) {  // inside a sweep: no axis takes its new drive value in the n clocks
+    if (pid_.sweep_clock() != 0 &&
+        !let.drive) {  // inside a sweep: no axis takes its new drive value in the n clocks
       const int s = pid_.sweep_clock();
       for (int a = 0; a < NAXES; ++a)
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
@@ -360,8 +395,11 @@ class MotionCore {
     if (!let.port && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     if (!pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
     for (int a = 0; a < NAXES; ++a) {
-      if (!dec_[a].quiet(quad_in(in, a, false)) || in.drv_ovr_we[a]) return false;
-      if (r_.drv_u[a] != u_sel(r_, in, a) || r_.drv_en[a] != drv_en(in, a)) return false;
+      const QuadIn qi = quad_in(in, a, false);
+      if (!(let.settle ? dec_[a].settle_clocks(qi) != Decoder::kUnsettled : dec_[a].quiet(qi)) ||
+          in.drv_ovr_we[a])
+        return false;
+      if ((!let.drive && r_.drv_u[a] != u_sel(r_, in, a)) || r_.drv_en[a] != drv_en(in, a)) return false;
     }
     return true;
   }
@@ -373,13 +411,35 @@ class MotionCore {
       ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
     }
   }
-  void skip_others(uint32_t n) {
+  // in: the inputs held (needed with let.settle or let.drive).
+  void skip_others(uint32_t n, const In* in, Let let) {
+    if (let.drive) skip_drive(n, *in);
     pid_.skip(n);
     for (int a = 0; a < NAXES; ++a) {
-      dec_[a].skip(n);
+      if (let.settle)
+        dec_[a].skip_settling(quad_in(*in, a, false), n);
+      else
+        dec_[a].skip(n);
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
+  }
+
+  // The sweep's output for axis a, which its drive command takes.
+  int16_t update(int a) const { return int16_t(pid_.core().u(a)); }
+  // The drive stage over n clocks with the sweep's updates (before the
+  // timers move): the drive command the last edge leaves, and the value
+  // and DIR registered from the command of the last clock (skip_others
+  // sets PWM from that value).
+  void skip_drive(uint32_t n, const In& in) {
+    for (int a = 0; a < NAXES; ++a) {
+      const uint32_t at = drive_change(in, a);  // the edge after the update's
+      const int16_t before = u_sel(r_, in, a);
+      if (at <= n) r_.drv_cmd[a] = update(a);
+      const int16_t u = at < n ? u_sel(r_, in, a) : before;
+      r_.drv_u[a] = u;
+      r_.dir[a] = u < 0;
+    }
   }
 
   uint32_t read_bank(uint8_t raddr) const { return uint32_t(bank_[r_.pb][raddr >> 3 & 3][raddr & 7]); }

@@ -70,9 +70,15 @@ class MotioncoreIcebreaker {
   bool flood() const { return u_board.flood_o(); }
   bool ledr_n() const { return !u_board.led_fault_o(); }
   bool ledg_n() const { return !u_board.led_ok_o(); }
-  // After how many of the next n edges axis a's PWM pin is high, when
-  // advance(p, n) does them (the drive holds; EN and DIR keep their level).
-  uint32_t pwm_high_in(int a, uint32_t n) const { return a < NAXES ? u_board.u_core.pwm_high_in(a, n) : 0; }
+  // Over edges from .. from + n - 1 of the stretch idle_clocks() found,
+  // when advance(p, n) does them: axis a's PWM (STEP) pin high after the
+  // edge, -1 with DIR set, else +1 (EN holds; a servo's drive may take the
+  // PID's new output inside, from edge drive_change(a) on).
+  int32_t drive_in(int a, uint32_t from, uint32_t n) const {
+    return a < NAXES ? u_board.drive_in(a, from, n) : 0;
+  }
+  static constexpr uint32_t kNoChange = Board::Core::kNoChange;
+  uint32_t drive_change(int a) const { return a < NAXES ? u_board.drive_change(a) : kNoChange; }
   uint64_t sp_high_in(uint32_t n) const { return u_board.u_io.sp_high_in(n); }
 
   // One rising clock edge with these pin levels.

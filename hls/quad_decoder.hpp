@@ -214,6 +214,38 @@ class QuadDecoder {
     r_.age = age > ones(AGE_W) ? ones(AGE_W) : uint32_t(age);
   }
 
+  // Fast-forward through an edge: with these inputs held and no strobe, the
+  // clocks until quiet() (0: it is now), provided that nothing a reader
+  // looks at between samples changes on the way: the error flag and count
+  // and the index latch (the position, velocity and age move, as they would
+  // on a quiet clock's caller's next sample). kUnsettled otherwise, or when
+  // the filter would take longer than kMaxSettle.
+  static constexpr uint32_t kUnsettled = ~0u;
+  static constexpr uint32_t kMaxSettle = (1u << FILT_W) + 8;
+  uint32_t settle_clocks(const QuadIn& in) const {
+    if (quiet(in)) return 0;
+    if (in.rst || in.latch || (POS_LOAD && in.pos_load) || in.idx_arm || in.idx_disarm || in.err_clr ||
+        in.sample)
+      return kUnsettled;
+    QuadDecoder d = *this;
+    for (uint32_t c = 1; c <= kMaxSettle; ++c) {
+      d.step(in);
+      const Regs& e = d.r_;
+      if (e.err_o != r_.err_o || e.err_cnt_o != r_.err_cnt_o || e.idx_pos_o != r_.idx_pos_o ||
+          e.idx_armed_o != r_.idx_armed_o || e.idx_seen_o != r_.idx_seen_o)
+        return kUnsettled;
+      if (d.quiet(in)) return c;
+    }
+    return kUnsettled;
+  }
+  // n clocks with these inputs after settle_clocks(in) said it settles:
+  // stepped until quiet, skipped from there.
+  void skip_settling(const QuadIn& in, uint32_t n) {
+    uint32_t i = 0;
+    for (; i < n && !quiet(in); ++i) step(in);
+    if (i < n) skip(n - i);
+  }
+
   // Single outputs, for users that need a few every clock.
   int32_t pos() const { return int32_t(r_.pos_o); }
   int32_t idx_pos() const { return int32_t(r_.idx_pos_o); }

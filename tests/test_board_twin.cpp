@@ -129,6 +129,7 @@ class Host {
     if (line_.idle()) schedule();
     return line_.next();
   }
+  bool queued() const { return !line_.idle(); }
   // Up to max clocks of one level at once: how many, and the level.
   uint32_t line(uint32_t max, bool& level) {
     if (line_.idle()) schedule();
@@ -136,6 +137,24 @@ class Host {
   }
   // A PID sample period of hundreds of clocks, as a machine has (after
   // reset it is the shortest, and the PID never rests).
+  // Armed, the PID on every axis with a proportional gain on a short
+  // sample period, no following-error limits: the drives follow the
+  // encoders.
+  void servo() {
+    const auto send = [this](const hp::Frame& f) {
+      line_.bytes(hp::encode(f));
+      line_.run(true, 1500);  // about a reply's time
+    };
+    send(hp::write(seq_++, br::WDOG, (1u << board::WDOG_W) - 1));
+    send(hp::write(seq_++, br::FAULT, 0xFFFF));
+    send(hp::write(seq_++, br::CTRL, 1u << bb::C_ARM));
+    for (int a = 0; a < 3; ++a) {
+      send(hp::write(seq_++, br::axis(a, br::AX_FERR), 0));
+      send(hp::write(seq_++, pid_reg::addr(uint8_t(a), pid_reg::KP), 1u << 20 | 16u << 24));
+      send(hp::write(seq_++, pid_reg::addr(uint8_t(a), pid_reg::CTRL), 1));
+    }
+    send(hp::write(seq_++, pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), 300));
+  }
   void slow_pid() {
     const uint32_t ts = irange(300, 3000);
     line_.run(true, 100);  // out of reset first
@@ -974,12 +993,26 @@ bool same_pins(const Twin& x, const Twin& y) {
 
 // Quiet stretches: long pauses on the line, encoders mostly still.
 constexpr Profile kIdle{"idle", 80, 10, 5, 3, 12, 2, 1, 1, 1, 1, 1, 30'000, 6, 300'000, 85, 5, 8, 20};
+// The same with the encoders mostly moving, no re-arming and the
+// watchdog fed: for Host::servo().
+constexpr Profile kServo{"servo", 80, 0, 5, 3, 12, 2, 1, 1, 1, 1, 1, 300, 1'000'000, 3'000'000, 10, 2, 8, 20};
 
 // A host's traffic on a board with a machine's PID period and pins that
 // move: the reference twin steps every clock, the fast one skips.
 struct Rig {
-  Rig(uint64_t seed, const Profile& traffic) : rng(seed), host(seed, traffic), pins(seed + 1, kIdle) {
+  Rig(uint64_t seed, const Profile& traffic, const Profile& pin_traffic = kIdle)
+      : rng(seed), host(seed, traffic), pins(seed + 1, pin_traffic) {
     host.slow_pid();
+  }
+  // Both twins clocked through what the host has queued (its frames reach
+  // the board whole only so: a loop that takes a line level per skip
+  // stretches their gaps past the byte timeout).
+  void step_queued() {
+    while (host.queued()) {
+      p.rx = host.line();
+      ref.step(p);
+      fast.step(p);
+    }
   }
   std::mt19937_64 rng;
   Host host;
@@ -993,9 +1026,24 @@ struct Rig {
 // the whole state compared after each skip, the pins every stepped clock and
 // TX every clock (a byte goes out inside an advance).
 TEST(BoardTwin, AdvanceEqualsSteps) {
-  uint64_t all_skips = 0, tx_bits = 0;  // tx_bits: TX edges inside advances
-  for (uint64_t seed : {401, 402, 403}) {
-    Rig rig(seed, kIdle);
+  // tx_bits: TX edges inside advances; drive_changes: new PID outputs taken inside
+  uint64_t all_skips = 0, tx_bits = 0, drive_changes = 0;
+  // Then a host that talks more (replies go out inside advances), and the
+  // three axes servoing on moving encoders (the PID's outputs are taken
+  // inside advances).
+  struct Run {
+    uint64_t seed;
+    const Profile& traffic;
+    bool servo;
+  };
+  for (const Run& run : {Run{401, kIdle, false}, Run{402, kIdle, false}, Run{403, kIdle, false},
+                         Run{404, kCommands, false}, Run{405, kServo, true}}) {
+    const uint64_t seed = run.seed;
+    Rig rig(seed, run.traffic, run.servo ? run.traffic : kIdle);
+    if (run.servo) {
+      rig.host.servo();
+      rig.step_queued();
+    }
     auto& [rng, host, pins, ref, fast, p] = rig;
     uint64_t clocks = 0, skipped = 0, skips = 0;
     while (clocks < 1'500'000) {
@@ -1006,23 +1054,45 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
       ASSERT_LE(k, limit);
       if (k > 0) {
         const uint32_t n = rng() % 4 ? k : 1 + uint32_t(rng() % k);  // the whole stretch, or part of it
-        uint32_t high[3];
-        for (int a = 0; a < 3; ++a) high[a] = fast.pwm_high_in(a, n);
+        // The drive over the stretch, and over a part of it from edge `from`.
+        const uint32_t from = uint32_t(rng() % n), part = 1 + uint32_t(rng() % (n - from));
+        int32_t drive[3], drive_part[3];
+        uint32_t change[3];
+        for (int a = 0; a < 3; ++a) {
+          drive[a] = fast.drive_in(a, 0, n);
+          drive_part[a] = fast.drive_in(a, from, part);
+          change[a] = fast.drive_change(a);
+        }
         std::vector<bool> line;  // TX after each clock, as tx_levels() tells it
         fast.tx_levels(n, [&](bool level, uint32_t m) { line.insert(line.end(), m, level); });
         ASSERT_EQ(line.size(), n);
+        int16_t cmd_before[3];
+        for (int a = 0; a < 3; ++a) cmd_before[a] = ref.u_board.u_core.drv_cmd(a);
         fast.advance(p, n);
-        uint32_t stepped_high[3] = {};
+        int32_t stepped[3] = {}, stepped_part[3] = {};
         for (uint32_t i = 0; i < n; ++i) {
           const bool tx = ref.tx();
+          bool dir_before[3];
+          for (int a = 0; a < 3; ++a) dir_before[a] = ref.dir(a);
           ref.step(p);
-          for (int a = 0; a < 3; ++a) stepped_high[a] += ref.pwm(a);
+          for (int a = 0; a < 3; ++a) {
+            const int32_t d = ref.pwm(a) ? (ref.dir(a) ? -1 : 1) : 0;
+            stepped[a] += d;
+            if (i >= from && i < from + part) stepped_part[a] += d;
+            // Inside, DIR changes only at the edge drive_change() names.
+            if (i > 0 && i != change[a]) {
+              ASSERT_EQ(dir_before[a], ref.dir(a)) << "DIR of axis " << a << " at edge " << i << " of " << n;
+            }
+          }
           ASSERT_EQ(line[i], ref.tx()) << "TX after clock " << i + 1 << " of " << n << " at clock " << clocks;
           tx_bits += ref.tx() != tx;
         }
-        for (int a = 0; a < 3; ++a)
-          ASSERT_EQ(high[a], stepped_high[a])
-              << "PWM high clocks of axis " << a << " over " << n << " clocks";
+        for (int a = 0; a < 3; ++a) {
+          ASSERT_EQ(drive[a], stepped[a]) << "drive of axis " << a << " over " << n << " clocks";
+          ASSERT_EQ(drive_part[a], stepped_part[a])
+              << "drive of axis " << a << " over edges " << from << " + " << part << " of " << n;
+          drive_changes += ref.u_board.u_core.drv_cmd(a) != cmd_before[a];
+        }
         clocks += n;
         skipped += n;
         ++skips;
@@ -1041,9 +1111,11 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
     EXPECT_GT(skipped, clocks / 2) << "seed " << seed;
     all_skips += skips;
   }
-  std::printf("advance: %llu TX edges inside advances\n", (unsigned long long)tx_bits);
+  std::printf("advance: %llu TX edges and %llu drive updates inside advances\n", (unsigned long long)tx_bits,
+              (unsigned long long)drive_changes);
   EXPECT_GT(all_skips, 3000u);
-  EXPECT_GT(tx_bits, 0u);  // the host's replies are few here; RunEqualsSteps sees thousands
+  EXPECT_GT(tx_bits, 100u);
+  EXPECT_GT(drive_changes, 1000u);
 }
 
 // The virtual board's host line ahead of time: pin_after(t) is pin() after t

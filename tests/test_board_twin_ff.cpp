@@ -158,12 +158,18 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
 }
 
 // The motion core with a running interpolator: quiet()/skip() against
-// clock(), the PID closing the loop on a still encoder; and (seeds 23, 24)
-// quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile.
+// clock(), the PID closing the loop on a still encoder; (seeds 23 to 26)
+// quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile;
+// and (seeds 25, 26) encoders that move, so that skips start while a
+// decoder works through an edge (Let::settle): counts up and down, now and
+// then both pins at once (an error) or the index, with an index arm or an
+// error clear between.
 TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
   using Core = MotionCore<2>;
-  for (uint64_t seed : {21, 22, 23, 24}) {
-    const bool busy = seed >= 23;
+  for (uint64_t seed : {21, 22, 23, 24, 25, 26}) {
+    const bool busy = seed >= 23, moving = seed >= 25;
+    int64_t count[2] = {};
+    uint64_t settling = 0;  // skips begun with a decoder not settled
     std::mt19937_64 rng(seed);
     SegGen gen(seed);
     gen.min_rate = 0.001;
@@ -198,6 +204,8 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
     }
     in.pid_we = false;
     in.drv_allow[0] = in.drv_allow[1] = true;
+    in.enc_filt[0] = uint32_t(seed % 4);
+    in.enc_filt[1] = 5;
     Vec3 at{0, 0, 0};
     std::vector<uint32_t> words;
     for (int s = 0; s < 20; ++s) {
@@ -210,12 +218,37 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       in.seg_wr = !words.empty() && rng() % 4 == 0 && ref.interp().count() < 300;
       in.seg_wdata = in.seg_wr ? words.front() : 0;
       if (in.seg_wr) words.erase(words.begin());
+      if (moving) {
+        for (int x = 0; x < 2; ++x) {
+          in.enc_idx_arm[x] = rng() % 800 == 0;
+          in.enc_err_clr[x] = rng() % 800 == 0;
+          const uint64_t r = rng() % 3000;
+          if (r < 60) count[x] += r < 30 ? 1 : -1;
+          const int q = int(count[x] & 3);
+          in.enc_a[x] = q == 1 || q == 2;
+          in.enc_b[x] = q >= 2;
+          if (r == 61) in.enc_a[x] = !in.enc_a[x];  // both pins at once: an error
+          if (r == 61) in.enc_b[x] = !in.enc_b[x];
+          if (r == 62) in.enc_z[x] = !in.enc_z[x];
+        }
+      }
       const uint32_t lim = busy ? fast.quiet_limit_busy() : fast.quiet_limit();
       const uint32_t n = lim == 0 ? 0 : (rng() % 3 ? lim : 1 + uint32_t(rng() % lim));
       uint32_t did = 0;
       if (n > 0 && (busy ? fast.quiet_busy(in, n) : fast.quiet(in, n))) {
+        for (int x = 0; x < 2; ++x) {
+          QuadIn qi;
+          qi.filt_len = in.enc_filt[x];
+          qi.a = in.enc_a[x];
+          qi.b = in.enc_b[x];
+          qi.z = in.enc_z[x];
+          if (!fast.decoder(x).quiet(qi)) {
+            ++settling;
+            break;
+          }
+        }
         if (busy) {
-          did = fast.skip_busy(n);
+          did = fast.skip_busy(in, n);
           ASSERT_LE(did, n);
         } else {
           fast.skip(n);
@@ -243,9 +276,13 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       ASSERT_TRUE(ref == fast) << "seed " << seed << ", clock " << clock;
     }
     ASSERT_FALSE(ref.interp().busy()) << "seed " << seed << ": the segments never finished";
-    std::printf("seed %llu: %llu clocks, %llu of them skipped\n", (unsigned long long)seed,
-                (unsigned long long)clock, (unsigned long long)skipped);
+    std::printf("seed %llu: %llu clocks, %llu of them skipped; %llu skips begun inside an edge\n",
+                (unsigned long long)seed, (unsigned long long)clock, (unsigned long long)skipped,
+                (unsigned long long)settling);
     EXPECT_GT(skipped, clock / 2) << "seed " << seed;
+    if (moving) {
+      EXPECT_GT(settling, 1000u) << "seed " << seed;
+    }
   }
 }
 

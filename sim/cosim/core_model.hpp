@@ -71,9 +71,9 @@ class TwinCore final : public CoreModel {
     const uint32_t n = std::min(limit, twin_.quiet_limit_busy());
     return n > 0 && twin_.quiet_busy(in, n) ? n : 0;
   }
-  uint32_t skip(const CoreIn& /*in*/, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
+  uint32_t skip(const CoreIn& in, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
     first = Skipped{used_outputs(), twin_.pwm_count()};
-    return twin_.skip_busy(n, [&](uint32_t clock) {
+    return twin_.skip_busy(in, n, [&](uint32_t clock) {
       CmdChange c;
       c.clock = clock;
       for (int a = 0; a < kCoreAxes; ++a) c.cmd[a] = twin_.interp().pos(a);

@@ -589,11 +589,12 @@ class Machine {
     const int64_t n = std::min<int64_t>(std::llabs(emit_n_[a]), int64_t(c / 2 + 1));
     return emit_from_[a] + (emit_n_[a] < 0 ? -n : (emit_n_[a] > 0 ? n : 0));
   }
-  // Clocks until the pins stop changing in this step.
+  // The clock of the step's last pin change (edges at clocks 0, 2, ...):
+  // from it on the pins hold.
   uint32_t emit_settled_at() const {
     uint32_t c = 0;
     for (int a = 0; a < kCoreAxes; ++a)
-      if (emit_n_[a] != 0) c = std::max<uint32_t>(c, uint32_t(2 * (std::llabs(emit_n_[a]) - 1) + 1));
+      if (emit_n_[a] != 0) c = std::max<uint32_t>(c, uint32_t(2 * (std::llabs(emit_n_[a]) - 1)));
     return c;
   }
 
@@ -658,8 +659,8 @@ class Machine {
     const uint32_t settle = c0 == 0 ? emit_settled_at() : 0;
     uint32_t c = c0;
     while (c < k_) {
-      // The pins change only while edges are due (settle clocks).
-      for (int a = 0; a < kCoreAxes && (c == 0 || c <= settle); ++a) {
+      // The pins change only while edges are due (up to clock settle).
+      for (int a = 0; a < kCoreAxes && c <= settle; ++a) {
         const QuadPins p = quadrature_pins(emitted(a, c), s_.machine.axes[size_t(a)].encoder_cpr);
         in_.enc_a[a] = p.a;
         in_.enc_b[a] = p.b;

@@ -13,12 +13,9 @@ class TwinBoard final : public BoardModel {
   uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive, UartReceiver& line) override {
     const uint32_t n = b_.idle_clocks(p, limit);
     if (n > 0) {
-      // EN and DIR hold through the stretch; PWM follows its counter.
-      for (int a = 0; a < kBoardAxes; ++a)
-        if (b_.drv_en()) {
-          const int32_t high = int32_t(b_.pwm_high_in(a, n));
-          drive[a] += b_.dir(a) ? -high : high;
-        }
+      // EN holds through the stretch; PWM follows its counter.
+      if (b_.drv_en())
+        for (int a = 0; a < kBoardAxes; ++a) drive[a] += b_.drive_in(a, 0, n);
       advance(p, n, line);
       return n;
     }
@@ -38,9 +35,11 @@ class TwinBoard final : public BoardModel {
   bool dir(int a) const override { return b_.dir(a); }
   uint32_t idle_clocks(const IcebreakerPins& p, uint32_t limit) override { return b_.idle_clocks(p, limit); }
   int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
-    if (!b_.drv_en()) return 0;
-    const int32_t high = int32_t(b_.pwm_high_in(a, from + n) - b_.pwm_high_in(a, from));
-    return b_.dir(a) ? -high : high;
+    return b_.drv_en() ? b_.drive_in(a, from, n) : 0;
+  }
+  uint32_t idle_drive_change(int a) const override {
+    const uint32_t c = b_.drive_change(a);
+    return c == b_.kNoChange ? kNoChange : c;
   }
   void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line) override {
     before_stretch(n, line);
