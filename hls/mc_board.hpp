@@ -199,6 +199,10 @@ class McBoard {
     if (u_step.stepper >> a & 1) return pwm_o(a) ? (dir_o(a) ? -int32_t(n) : int32_t(n)) : 0;
     return u_core.drive_in(core_in_, a, from, n);
   }
+  uint32_t drive_runs(int a, uint32_t from, uint32_t k, uint32_t max) const {
+    if (u_step.stepper >> a & 1) return max;
+    return u_core.drive_runs(core_in_, a, from, k, max);
+  }
   uint32_t drive_change(int a) const {
     if ((u_step.stepper >> a & 1) || !let_.drive) return Core::kNoChange;
     return u_core.drive_change(core_in_, a);

@@ -335,6 +335,21 @@ class MotionCore {
     return piece(now, from, split - from) +
            piece(in.drv_allow[a] ? update(a) : int16_t(0), split, end - split);
   }
+  // Of up to max runs of k edges from edge `from` of such a stretch, how
+  // many in a row leave axis a's PWM pin at one level throughout (0: not
+  // the first), none reaching past drive_change() unless all after it.
+  uint32_t drive_runs(const In& in, int a, uint32_t from, uint32_t k, uint32_t max) const {
+    const uint32_t at = drive_change(in, a);
+    const bool after = at != kNoChange && from >= at;
+    const uint32_t d = duty(after ? (in.drv_allow[a] ? update(a) : int16_t(0)) : u_sel(r_, in, a));
+    constexpr uint32_t P = pwm_mask + 1;
+    // The pin is high while the counter is below the duty: runs of k edges
+    // go by until the counter crosses it, or wraps.
+    const uint32_t c = (r_.pcnt + from) & pwm_mask;
+    uint32_t r = d == 0 || d >= P ? max : (c < d ? d - c : P - c) / k;
+    if (at != kNoChange && !after) r = std::min(r, (at - from) / k);
+    return std::min(r, max);
+  }
   // The first edge of the stretch whose pin the sweep's drive update sets
   // (its clock's edge is the update, the next the drive value's), or
   // kNoChange.

@@ -77,6 +77,11 @@ class MotioncoreIcebreaker {
   int32_t drive_in(int a, uint32_t from, uint32_t n) const {
     return a < NAXES ? u_board.drive_in(a, from, n) : 0;
   }
+  // Of up to max runs of k edges from edge `from` of that stretch, how many
+  // in a row leave axis a's PWM (STEP) pin at one level throughout.
+  uint32_t drive_runs(int a, uint32_t from, uint32_t k, uint32_t max) const {
+    return a < NAXES ? u_board.drive_runs(a, from, k, max) : max;
+  }
   static constexpr uint32_t kNoChange = Board::Core::kNoChange;
   uint32_t drive_change(int a) const { return a < NAXES ? u_board.drive_change(a) : kNoChange; }
   uint64_t sp_high_in(uint32_t n) const { return u_board.u_io.sp_high_in(n); }

@@ -1027,7 +1027,7 @@ struct Rig {
 // TX every clock (a byte goes out inside an advance).
 TEST(BoardTwin, AdvanceEqualsSteps) {
   // tx_bits: TX edges inside advances; drive_changes: new PID outputs taken inside
-  uint64_t all_skips = 0, tx_bits = 0, drive_changes = 0;
+  uint64_t all_skips = 0, tx_bits = 0, drive_changes = 0, runs_ended = 0;
   // Then a host that talks more (replies go out inside advances), and the
   // three axes servoing on moving encoders (the PID's outputs are taken
   // inside advances).
@@ -1056,14 +1056,19 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
         const uint32_t n = rng() % 4 ? k : 1 + uint32_t(rng() % k);  // the whole stretch, or part of it
         // The drive over the stretch, and over a part of it from edge `from`.
         const uint32_t from = uint32_t(rng() % n), part = 1 + uint32_t(rng() % (n - from));
+        // And runs of kk clocks from `from` at one PWM level (drive_runs).
+        const uint32_t kk = 1 + uint32_t(rng() % 24), most = (n - from) / kk;
         int32_t drive[3], drive_part[3];
-        uint32_t change[3];
+        uint32_t change[3], runs[3];
         for (int a = 0; a < 3; ++a) {
           drive[a] = fast.drive_in(a, 0, n);
           drive_part[a] = fast.drive_in(a, from, part);
           change[a] = fast.drive_change(a);
+          runs[a] = fast.drive_runs(a, from, kk, most);
+          ASSERT_LE(runs[a], most);
         }
-        std::vector<bool> line;  // TX after each clock, as tx_levels() tells it
+        std::vector<int8_t> pins_after[3];  // the signed pin after each edge
+        std::vector<bool> line;             // TX after each clock, as tx_levels() tells it
         fast.tx_levels(n, [&](bool level, uint32_t m) { line.insert(line.end(), m, level); });
         ASSERT_EQ(line.size(), n);
         int16_t cmd_before[3];
@@ -1077,6 +1082,7 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
           ref.step(p);
           for (int a = 0; a < 3; ++a) {
             const int32_t d = ref.pwm(a) ? (ref.dir(a) ? -1 : 1) : 0;
+            pins_after[a].push_back(int8_t(d));
             stepped[a] += d;
             if (i >= from && i < from + part) stepped_part[a] += d;
             // Inside, DIR changes only at the edge drive_change() names.
@@ -1092,6 +1098,15 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
           ASSERT_EQ(drive_part[a], stepped_part[a])
               << "drive of axis " << a << " over edges " << from << " + " << part << " of " << n;
           drive_changes += ref.u_board.u_core.drv_cmd(a) != cmd_before[a];
+          // The runs at one level, and no more of them (unless the next
+          // would reach past the change).
+          const auto b = pins_after[a].begin() + from;
+          ASSERT_TRUE(std::all_of(b, b + runs[a] * kk, [&](int8_t x) { return x == *b; })) << "axis " << a;
+          if (runs[a] < most && from + (runs[a] + 1) * kk <= change[a]) {
+            ++runs_ended;
+            ASSERT_FALSE(std::all_of(b, b + (runs[a] + 1) * kk, [&](int8_t x) { return x == *b; }))
+                << "axis " << a << ": " << runs[a] << " runs of " << kk << ", and one more";
+          }
         }
         clocks += n;
         skipped += n;
@@ -1116,6 +1131,7 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
   EXPECT_GT(all_skips, 3000u);
   EXPECT_GT(tx_bits, 100u);
   EXPECT_GT(drive_changes, 1000u);
+  EXPECT_GT(runs_ended, 1000u);
 }
 
 // The virtual board's host line ahead of time: pin_after(t) is pin() after t

@@ -37,9 +37,8 @@ class TwinBoard final : public BoardModel {
   int32_t idle_drive(int a, uint32_t from, uint32_t n) const override {
     return b_.drv_en() ? b_.drive_in(a, from, n) : 0;
   }
-  uint32_t idle_drive_change(int a) const override {
-    const uint32_t c = b_.drive_change(a);
-    return c == b_.kNoChange ? kNoChange : c;
+  uint32_t idle_drive_runs(int a, uint32_t from, uint32_t k, uint32_t max) const override {
+    return b_.drv_en() ? b_.drive_runs(a, from, k, max) : max;
   }
   void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line) override {
     before_stretch(n, line);

@@ -27,7 +27,7 @@ class BoardModel {
   // At least one and at most `limit` clocks with the pins p held: one
   // stepped clock, or a stretch in which nothing but counters and the bits
   // of a byte on TX change (DRV_EN holds; a drive may take the PID's new
-  // output, its PWM and DIR following, idle_drive_change). drive[a] gains, per clock,
+  // output, its PWM and DIR following). drive[a] gains, per clock,
   // +1 (-1 with DIR) after each edge that leaves axis a's bridge on (DRV_EN
   // and PWM high); `line` takes TX after each clock. Returns the clocks done.
   virtual uint32_t run(const IcebreakerPins& p, uint32_t limit, int32_t* drive, UartReceiver& line) = 0;
@@ -52,10 +52,12 @@ class BoardModel {
   // once, TX after each into `line`.
   virtual uint32_t idle_clocks(const IcebreakerPins& /*p*/, uint32_t /*limit*/) { return 0; }
   virtual int32_t idle_drive(int /*axis*/, uint32_t /*from*/, uint32_t /*n*/) const { return 0; }
-  // The clock of such a stretch from which axis a's drive is the PID's new
-  // output (its PWM duty and DIR may change there), or kNoChange.
-  static constexpr uint32_t kNoChange = ~0u;
-  virtual uint32_t idle_drive_change(int /*axis*/) const { return kNoChange; }
+  // Of up to max runs of k clocks from clock `from` of such a stretch, how
+  // many in a row keep axis a's drive at one level throughout (the bridge
+  // on, or off, every clock; 0: not the first).
+  virtual uint32_t idle_drive_runs(int /*axis*/, uint32_t /*from*/, uint32_t /*k*/, uint32_t /*max*/) const {
+    return 0;
+  }
   virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/) {}
   // The same inside a byte on RX, with the host's line ahead of time
   // (rx(t): the RX pin in the t-th clock from now, the other pins held):

@@ -378,45 +378,18 @@ struct VirtualBoard::Impl {
       }
     return end;
   }
-  // Axis a's plant over up to end steps, stopping after a count change.
+  // Axis a's plant over up to end steps, stopping after a count change:
+  // each step with the drive's mean over it, runs of whole steps through
+  // which the bridge holds one level (on or off: the PWM counter's phase
+  // and the duty tell how many) at once.
   uint64_t hold_axis(int a, uint64_t end) {
     Slot& s = slot[a];
-    // Where the drive takes the PID's new output (its duty and sign change
-    // there): a run of whole steps ends before that step, and the step is
-    // one of its own unless the change falls on its first clock.
-    const uint32_t change = board->idle_drive_change(a);
-    const uint64_t split = change == BoardModel::kNoChange ? end : std::min<uint64_t>(end, change / k);
-    const bool mixed = change != BoardModel::kNoChange && change % k != 0;
     uint64_t j = 0;
     while (j < end) {
       const int32_t d = board->idle_drive(a, uint32_t(j * k), k);
-      uint64_t r = 1;
-      const uint64_t stop = j < split ? split : end;  // the drive's sign holds in [j, stop)
-      if ((d == 0 || uint32_t(std::abs(d)) == k) && !(mixed && j == split)) {
-        // The run of whole steps high (or low) from j: sum == steps * d
-        // holds only while every step's is d. Doubling, then halving.
-        const auto whole = [&](uint64_t n) {
-          return board->idle_drive(a, uint32_t(j * k), uint32_t(n * k)) == int32_t(n) * d;
-        };
-        uint64_t bad = 0;
-        for (uint64_t t = 2; r < stop - j; t *= 2) {
-          const uint64_t n = std::min(t, stop - j);
-          if (!whole(n)) {
-            bad = n;
-            break;
-          }
-          r = n;
-        }
-        while (bad > r + 1) {
-          const uint64_t mid = r + (bad - r) / 2;
-          if (whole(mid))
-            r = mid;
-          else
-            bad = mid;
-        }
-      }
-      const uint64_t t = s.plant->hold(s.supply_v * double(d) / double(k), r);
-      j += t;
+      const uint64_t r =
+          std::max<uint32_t>(1, board->idle_drive_runs(a, uint32_t(j * k), k, uint32_t(end - j)));
+      j += s.plant->hold(s.supply_v * double(d) / double(k), r);
       if (s.encoder_count() != s.shown) break;
     }
     return j;

@@ -210,7 +210,8 @@ struct ServeStatus {
 std::string describe_speed(const ServeStatus& s, bool paced);
 
 struct ServeOptions {
-  bool paced = true;          // at most 4 ms ahead of the wall clock (1 ms after host bytes); false: flat out (--speed max)
+  bool paced =
+      true;  // at most 4 ms ahead of the wall clock (1 ms after host bytes); false: flat out (--speed max)
   double idle_exit_s = 0;     // return after this long without a host byte (0: never)
   double status_every_s = 5;  // wall seconds between status reports
   // Free-running: after answering a host request, wait this long (wall) for
