@@ -86,6 +86,7 @@ class McBoard {
     wired_ = false;
     walk_ = 0;
     let_ = {};
+    sending_ = false;
     const uint8_t tx_byte = u_ltx.byte_o;
     const bool tx_valid = u_ltx.valid_o;
     u_urx.clock(in.rst, in.rx);
@@ -127,8 +128,12 @@ class McBoard {
   uint32_t quiet_but_rx(const McBoardIn& in, uint32_t n) {
     walk_ = 0;
     let_ = {};
+    sending_ = false;
     if (n == 0 || in.rst) return 0;
-    n = u_utx.quiet(u_ltx.valid_o, n);
+    // A frame on its way out (link_tx busy) goes on inside the stretch
+    // (sending_, below); otherwise uart_tx is idle, and a byte handed to it
+    // ends the stretch.
+    if (!u_ltx.busy_o()) n = u_utx.quiet(u_ltx.valid_o, n);
     if (n == 0 || u_regs.r.xs != Regs::X_IDLE) return 0;
     if (u_lrx.st == u_lrx.S_HUNT && (u_lrx.idle != 0 || !u_lrx.u_crc.at_init())) return 0;
     Wires& w = w_;
@@ -139,7 +144,9 @@ class McBoard {
     // The walker reading a sample with no telemetry to send: it may run
     // inside the stretch (walk_clocks).
     const bool walking = !u_regs.walk_settled(w.regs);
-    if (n == 0 || !u_ltx.quiet(w.ltx) || !u_regs.quiet_but_walk(w.regs) || (walking && !u_regs.walk_silent()))
+    sending_ = u_ltx.busy_o() && !w.ltx.we && !w.ltx.start;
+    if (n == 0 || !(sending_ || u_ltx.quiet(w.ltx)) || !u_regs.quiet_but_walk(w.regs) ||
+        (walking && !u_regs.walk_silent()))
       return 0;
     n = u_safety.quiet(w.safety, n);
     // A running segment may go on inside the stretch while its command
@@ -162,7 +169,26 @@ class McBoard {
       typename Core::Interp ip = u_core.interp();
       n = ip.run_to_end(n);
     }
+    if (sending_) {
+      // Up to the clock in which the frame's end frees link_tx, the register
+      // file seeing it busy until then (copies find it).
+      LinkTx l = u_ltx;
+      UartTx<CLK_HZ, BAUD> u = u_utx;
+      n = send(l, u, w.ltx, n, [](bool, uint32_t) {});
+    }
     return n;
+  }
+  // The line after each of the next n clocks of the stretch quiet() found,
+  // as runs: f(level, clocks), the clocks adding up to n.
+  template <typename F>
+  void tx_levels(uint32_t n, F&& f) const {
+    if (!sending_) {
+      u_utx.levels(n, f);
+      return;
+    }
+    LinkTx l = u_ltx;
+    UartTx<CLK_HZ, BAUD> u = u_utx;
+    send(l, u, w_.ltx, n, f);
   }
   // A walk on its own: the register file clocked with the other blocks
   // quiet, the sample RAM's read port following its address as
@@ -229,9 +255,13 @@ class McBoard {
       }
       walk_ -= n;
     }
-    u_utx.skip(n);
+    if (sending_) {
+      send(u_ltx, u_utx, w_.ltx, n, [](bool, uint32_t) {});
+    } else {
+      u_utx.skip(n);
+      u_ltx.skip(n);
+    }
     u_lrx.skip(n);
-    u_ltx.skip(n);
     u_safety.skip(n);
     if (let_.busy) {
       // quiet() found at least n clocks before the segment's end. The step
@@ -251,6 +281,34 @@ class McBoard {
   }
 
  private:
+  // The frame going out (link_tx busy) over up to n clocks with link_tx's
+  // inputs held but uart_tx's ready: the two blocks on their own, as clock()
+  // clocks them (uart_tx takes the byte link_tx showed, link_tx sees the
+  // ready of the clock before), the bits of a byte at once. Stops after the
+  // clock that frees link_tx; f(level, clocks) tells TX after each clock,
+  // as runs. Returns the clocks done.
+  template <typename F>
+  static uint32_t send(LinkTx& l, UartTx<CLK_HZ, BAUD>& u, LinkTxIn in, uint32_t n, F&& f) {
+    uint32_t c = 0;
+    while (c < n && l.busy_o()) {
+      in.ready = u.ready_o();
+      if (const uint32_t m = l.quiet(in) ? u.quiet(l.valid_o, n - c) : 0; m > 0) {  // a byte's bits
+        u.levels(m, f);
+        u.skip(m);
+        l.skip(m);
+        c += m;
+        continue;
+      }
+      const uint8_t byte = l.byte_o;
+      const bool valid = l.valid_o;
+      u.clock(false, byte, valid);
+      l.clock(in);
+      f(u.tx_o, 1u);
+      ++c;
+    }
+    return c;
+  }
+
   // The wires of the current clock: every block's inputs.
   struct Wires {
     LinkRxIn lrx;
@@ -451,6 +509,7 @@ class McBoard {
   // w_ holds the wires of this state for wired_in_ (quiet() computed them):
   // a clock() with the same inputs that follows takes them as they are.
   bool wired_ = false;
+  bool sending_ = false;  // quiet() found a frame going out inside the stretch
   McBoardIn wired_in_;
   // The clocks of the walk quiet() found that skip() has still to do.
   static constexpr uint32_t kMaxWalk = 64;

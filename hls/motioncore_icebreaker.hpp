@@ -138,7 +138,7 @@ class MotioncoreIcebreaker {
   // (not RTL).
   template <typename F>
   void tx_levels(uint32_t n, F&& f) const {
-    u_board.u_utx.levels(n, f);
+    u_board.tx_levels(n, f);
   }
 
   // n clocks with these pins held: step(p) where something happens,

@@ -1026,8 +1026,10 @@ struct Rig {
 // the whole state compared after each skip, the pins every stepped clock and
 // TX every clock (a byte goes out inside an advance).
 TEST(BoardTwin, AdvanceEqualsSteps) {
-  // tx_bits: TX edges inside advances; drive_changes: new PID outputs taken inside
-  uint64_t all_skips = 0, tx_bits = 0, drive_changes = 0, runs_ended = 0;
+  // tx_bits: TX edges inside advances; frames: advances in which link_tx
+  // handed uart_tx a byte (two start bits or more); drive_changes: new PID
+  // outputs taken inside
+  uint64_t all_skips = 0, tx_bits = 0, frames = 0, drive_changes = 0, runs_ended = 0;
   // Then a host that talks more (replies go out inside advances), and the
   // three axes servoing on moving encoders (the PID's outputs are taken
   // inside advances).
@@ -1075,6 +1077,7 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
         for (int a = 0; a < 3; ++a) cmd_before[a] = ref.u_board.u_core.drv_cmd(a);
         fast.advance(p, n);
         int32_t stepped[3] = {}, stepped_part[3] = {};
+        uint32_t starts = 0;  // start bits on TX
         for (uint32_t i = 0; i < n; ++i) {
           const bool tx = ref.tx();
           bool dir_before[3];
@@ -1092,6 +1095,7 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
           }
           ASSERT_EQ(line[i], ref.tx()) << "TX after clock " << i + 1 << " of " << n << " at clock " << clocks;
           tx_bits += ref.tx() != tx;
+          starts += tx && !ref.tx();
         }
         for (int a = 0; a < 3; ++a) {
           ASSERT_EQ(drive[a], stepped[a]) << "drive of axis " << a << " over " << n << " clocks";
@@ -1108,6 +1112,7 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
                 << "axis " << a << ": " << runs[a] << " runs of " << kk << ", and one more";
           }
         }
+        frames += starts >= 2;
         clocks += n;
         skipped += n;
         ++skips;
@@ -1126,10 +1131,11 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
     EXPECT_GT(skipped, clocks / 2) << "seed " << seed;
     all_skips += skips;
   }
-  std::printf("advance: %llu TX edges and %llu drive updates inside advances\n", (unsigned long long)tx_bits,
-              (unsigned long long)drive_changes);
+  std::printf("advance: %llu TX edges, %llu byte hand-overs and %llu drive updates inside advances\n",
+              (unsigned long long)tx_bits, (unsigned long long)frames, (unsigned long long)drive_changes);
   EXPECT_GT(all_skips, 3000u);
   EXPECT_GT(tx_bits, 100u);
+  EXPECT_GT(frames, 3u);
   EXPECT_GT(drive_changes, 1000u);
   EXPECT_GT(runs_ended, 1000u);
 }

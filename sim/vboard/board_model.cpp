@@ -44,6 +44,7 @@ class TwinBoard final : public BoardModel {
     before_stretch(n, line);
     b_.advance(p, n);
   }
+  void idle_tx(uint32_t n, const Levels& f) const override { b_.tx_levels(n, f); }
   uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, const RxLine& rx) override {
     return b_.line_clocks(p, limit, rx);
   }

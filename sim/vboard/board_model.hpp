@@ -59,6 +59,10 @@ class BoardModel {
     return 0;
   }
   virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/) {}
+  // TX after each of the next n clocks of such a stretch, before advance()
+  // does them: f(level, clocks), as runs adding up to n.
+  using Levels = std::function<void(bool, uint32_t)>;
+  virtual void idle_tx(uint32_t /*n*/, const Levels& /*f*/) const {}
   // The same inside a byte on RX, with the host's line ahead of time
   // (rx(t): the RX pin in the t-th clock from now, the other pins held):
   // the stretch goes on through the byte's bits (0 while RX is idle:

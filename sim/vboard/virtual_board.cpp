@@ -298,11 +298,11 @@ struct VirtualBoard::Impl {
     const uint32_t limit = uint32_t(std::min<uint64_t>(steps * k, 1u << 30));
     uint64_t most =
         (hosting ? board->line_clocks(pins, limit, host_line) : board->idle_clocks(pins, limit)) / k;
-    // A byte the board sends goes by inside; the receiver takes it in the
-    // jump's last step at the latest, as plant_step() would hand it on then
-    // (the board's stretch may run a few clocks past it: more than a step
-    // when a step is that short).
-    if (rx.busy()) most = std::min(most, (rx.clocks_to_byte() + k - 1) / k);
+    // The bytes the board sends go by inside; the receiver takes the first in
+    // the jump's last step at the latest, as plant_step() would hand it on
+    // then (the board's stretch may run past it: more than a step when a step
+    // is that short, or a whole frame).
+    if (const uint64_t t = clocks_to_byte(most * k); t != kNever) most = std::min(most, (t + k - 1) / k);
     if (most == 0) return false;
     uint64_t j = 0;
     if (contacts_clear()) {
@@ -332,6 +332,35 @@ struct VirtualBoard::Impl {
     if (hosting || sending || rx.busy() || rx.has_byte()) last_activity = cycles;
     while (rx.has_byte()) out.push_back(rx.take());
     return true;
+  }
+
+  // Of the next n clocks of the board's stretch, the clock in which the
+  // receiver takes the first byte (or finds a framing error; counted from
+  // 1), from a copy of it fed the stretch's TX; kNever: none.
+  uint64_t clocks_to_byte(uint64_t n) const {
+    UartReceiver copy = rx;
+    uint64_t t = 0, at = kNever;
+    board->idle_tx(uint32_t(n), [&](bool level, uint32_t run) {
+      while (run > 0 && at == kNever) {
+        if (copy.busy()) {
+          if (const uint64_t b = copy.clocks_to_byte(); b <= run) {
+            at = t + b;
+            return;
+          }
+          copy.clock_n(level, run);
+          t += run;
+          return;
+        }
+        if (level) {  // idle and the line high: nothing starts
+          t += run;
+          return;
+        }
+        copy.clock(level);  // a start bit
+        ++t;
+        --run;
+      }
+    });
+    return at;
   }
 
   // No switch can change while every table stays within its encoder
