@@ -110,12 +110,13 @@ class McBoard {
 
   // ---- fast-forward ----------------------------------------------------------
   // Clocks (up to limit) with these inputs held that change nothing but
-  // counters and timers (and TX's bits): the receiver idle or inside a
-  // bit, the transmitter idle or inside a byte, the link idle or
-  // waiting (for the next byte of a frame before the timeout, for uart_tx),
-  // no frame being worked on, no sample due, the decoders settled, no
-  // fault. skip(n) then does n of them at once, leaving exactly the state of
-  // n clocks; 0 means clock() this one.
+  // counters and timers, TX's bits, a frame going out (link_tx and uart_tx
+  // on their own: send), a decoder settling an edge and the PID sweep's
+  // drive updates (MotionCore::Let): the receiver idle or inside a bit, the
+  // link idle or waiting (for the next byte of a frame before the timeout,
+  // for uart_tx), no frame being parsed or answered, no tick or done, no
+  // fault. skip(n) then does n of them at once, leaving exactly the state
+  // of n clocks; 0 means clock() this one.
   uint32_t quiet(const McBoardIn& in, uint32_t limit) { return quiet_but_rx(in, u_urx.quiet(in.rx, limit)); }
   // The same inside a byte on RX, with the line's future known (rx(t):
   // in.rx in the t-th clock from now): the stretch goes on through the

@@ -230,9 +230,9 @@ class MotionCore {
   // then does them at once (the inputs held are those quiet() was given).
   // The PWM pin ends as the last of those clocks leaves it.
   bool quiet(const In& in, uint32_t n) const { return quiet_as(in, n, Let{}); }
-  // What quiet_as() may also let change in the n clocks, neither of which
-  // the core shows before its next tick, drive update or done
-  // (quiet_limit_busy() bounds n to those):
+  // What quiet_as() may also let change in the n clocks, which the core's
+  // readers see only at its next tick or, for the drive, from the clocks
+  // drive_in() tells (quiet_limit_as() bounds n to the tick and done):
   struct Let {
     // The sample RAM's read port, whose address the board's register file
     // walks after a sample (McBoard::walk_clocks; read_port(raddr) is the
@@ -269,7 +269,7 @@ class MotionCore {
   uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
   // Like quiet(), but the interpolator may run a segment meanwhile, with no
   // input (its position moving: the PID reads it only at a tick).
-  // skip_busy(n) then does at most n such clocks, stopping before the clock
+  // skip_busy(in, n) then does at most n such clocks, stopping before the clock
   // that would end the segment, and returns how many it did; its last clock
   // does not move the position (InterpCore::run_for); moved(i): the i-th
   // clock moved it.
@@ -322,7 +322,7 @@ class MotionCore {
   // integrates the drive over a skipped stretch needs it; not RTL). The pin
   // after edge t is duty(u) > the counter in clock t and DIR is u < 0, u
   // the drive command then (zero unless allowed); with let.drive the
-  // sweep's update comes in from drive_change() on.
+  // sweep's update comes in from drive_change() on. n < 2^31.
   int32_t drive_in(const In& in, int a, uint32_t from, uint32_t n) const {
     const uint32_t at = drive_change(in, a), end = from + n;
     const uint32_t split = std::clamp(at, from, end);
@@ -335,9 +335,9 @@ class MotionCore {
     return piece(now, from, split - from) +
            piece(in.drv_allow[a] ? update(a) : int16_t(0), split, end - split);
   }
-  // Of up to max runs of k edges from edge `from` of such a stretch, how
-  // many in a row leave axis a's PWM pin at one level throughout (0: not
-  // the first), none reaching past drive_change() unless all after it.
+  // Of up to max runs of k >= 1 edges from edge `from` of such a stretch,
+  // how many in a row leave axis a's PWM pin at one level throughout (0:
+  // not the first), none reaching past drive_change() unless all after it.
   uint32_t drive_runs(const In& in, int a, uint32_t from, uint32_t k, uint32_t max) const {
     const uint32_t at = drive_change(in, a);
     const bool after = at != kNoChange && from >= at;

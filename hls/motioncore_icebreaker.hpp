@@ -17,7 +17,7 @@
 // the clocks in which only counters move (idle_clocks/advance): the UART
 // idle, no frame being worked on, no PID sample due, no timer expiring.
 // PWM and LED pins keep following their counters inside such a stretch,
-// and a byte on TX goes out bit by bit (tx_levels tells the line there).
+// and a frame on TX goes out (tx_levels tells the line there).
 //
 // Synthesizable subset: fixed-width integers, no heap, static loop bounds.
 #pragma once
@@ -134,7 +134,7 @@ class MotioncoreIcebreaker {
   }
 
   // TX after each of the next n clocks that advance(p, n) would do, as runs
-  // (f(level, clocks), in order): a byte going out keeps the stretch going
+  // (f(level, clocks), in order): a frame going out keeps the stretch going
   // (not RTL).
   template <typename F>
   void tx_levels(uint32_t n, F&& f) const {

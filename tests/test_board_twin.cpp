@@ -1103,10 +1103,11 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
               << "drive of axis " << a << " over edges " << from << " + " << part << " of " << n;
           drive_changes += ref.u_board.u_core.drv_cmd(a) != cmd_before[a];
           // The runs at one level, and no more of them (unless the next
-          // would reach past the change).
+          // would straddle the change).
           const auto b = pins_after[a].begin() + from;
           ASSERT_TRUE(std::all_of(b, b + runs[a] * kk, [&](int8_t x) { return x == *b; })) << "axis " << a;
-          if (runs[a] < most && from + (runs[a] + 1) * kk <= change[a]) {
+          const bool straddles = from < change[a] && from + (runs[a] + 1) * kk > change[a];
+          if (runs[a] < most && !straddles) {
             ++runs_ended;
             ASSERT_FALSE(std::all_of(b, b + (runs[a] + 1) * kk, [&](int8_t x) { return x == *b; }))
                 << "axis " << a << ": " << runs[a] << " runs of " << kk << ", and one more";

@@ -45,7 +45,9 @@ class PrivateRuntimeDir {
 // once), so the pipe holds minutes of them while nobody reads.
 class Server {
  public:
-  explicit Server(bool watch_status = false) {
+  // paced: the board paced to the wall clock (`--speed 1`), for a test that
+  // measures the host's own timing in board time.
+  explicit Server(bool watch_status = false, bool paced = false) {
     int out[2], err[2] = {-1, -1};
     if (::pipe(out) != 0 || (watch_status && ::pipe(err) != 0)) throw std::runtime_error("pipe");
     // MC_VBOARD_ENGINE=rtl (tests/vboard.cmake sets it for a second run of
@@ -53,7 +55,8 @@ class Server {
     // Free-running, but waiting for the CLI's next request after each answer:
     // on a loaded machine a CLI's reaction time would otherwise become tens
     // of milliseconds of board time.
-    std::vector<std::string> args = {"sim", "serve", "--fast", "--host-wait", "20ms", "--no-register"};
+    std::vector<std::string> args = {"sim", "serve", "--no-register"};
+    if (!paced) args.insert(args.end(), {"--fast", "--host-wait", "20ms"});
     if (const char* e = std::getenv("MC_VBOARD_ENGINE")) args.insert(args.end(), {"--engine", e});
     if (watch_status) args.insert(args.end(), {"--status-every", "1s"});
     pid_ = spawn(args, out[1], err[1]);

@@ -25,8 +25,8 @@ class BoardModel {
  public:
   virtual ~BoardModel() = default;
   // At least one and at most `limit` clocks with the pins p held: one
-  // stepped clock, or a stretch in which nothing but counters and the bits
-  // of a byte on TX change (DRV_EN holds; a drive may take the PID's new
+  // stepped clock, or a stretch in which nothing but counters and a frame
+  // going out on TX change (DRV_EN holds; a drive may take the PID's new
   // output, its PWM and DIR following). drive[a] gains, per clock,
   // +1 (-1 with DIR) after each edge that leaves axis a's bridge on (DRV_EN
   // and PWM high); `line` takes TX after each clock. Returns the clocks done.

@@ -269,11 +269,11 @@ struct VirtualBoard::Impl {
   }
 
   // The twin's event loop: from a step boundary, the whole plant steps in
-  // which the board only counts (no frame being worked on, no PID tick or
-  // drive update, no interpolator iteration, no encoder edge to show; a
-  // byte the board sends goes out bit by bit inside, and the data bits of
-  // one the host sends come in, the line being known ahead) go by with the
-  // board advanced over them at once. The
+  // which the board only counts (no frame being parsed or answered, no PID
+  // tick or done, no interpolator iteration, no encoder edge to show; a
+  // frame the board sends goes out inside, so do the PID's drive updates,
+  // and the data bits of a byte the host sends come in, the line being
+  // known ahead) go by with the board advanced over them at once. The
   // plants take every step with the drive the clock-by-clock path would
   // count (the PWM pins follow their counters): by runs of equal drive
   // where no switch can change (hold_plants), else one by one. Positions
