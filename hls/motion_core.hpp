@@ -332,8 +332,7 @@ class MotionCore {
     };
     const int16_t now = u_sel(r_, in, a);
     if (split == end) return piece(now, from, n);
-    return piece(now, from, split - from) +
-           piece(in.drv_allow[a] ? update(a) : int16_t(0), split, end - split);
+    return piece(now, from, split - from) + piece(updated(in, a), split, end - split);
   }
   // Of up to max runs of k >= 1 edges from edge `from` of such a stretch,
   // how many in a row leave axis a's PWM pin at one level throughout (0:
@@ -341,7 +340,7 @@ class MotionCore {
   uint32_t drive_runs(const In& in, int a, uint32_t from, uint32_t k, uint32_t max) const {
     const uint32_t at = drive_change(in, a);
     const bool after = at != kNoChange && from >= at;
-    const uint32_t d = duty(after ? (in.drv_allow[a] ? update(a) : int16_t(0)) : u_sel(r_, in, a));
+    const uint32_t d = duty(after ? updated(in, a) : u_sel(r_, in, a));
     constexpr uint32_t P = pwm_mask + 1;
     // The pin is high while the counter is below the duty: runs of k edges
     // go by until the counter crosses it, or wraps.
@@ -440,8 +439,10 @@ class MotionCore {
     r_.pcnt = (r_.pcnt + n) & pwm_mask;
   }
 
-  // The sweep's output for axis a, which its drive command takes.
+  // The sweep's output for axis a, which its drive command takes, and the
+  // drive value it gives (zero unless the drive is allowed).
   int16_t update(int a) const { return int16_t(pid_.core().u(a)); }
+  int16_t updated(const In& in, int a) const { return in.drv_allow[a] ? update(a) : int16_t(0); }
   // The drive stage over n clocks with the sweep's updates (before the
   // timers move): the drive command the last edge leaves, and the value
   // and DIR registered from the command of the last clock (skip_others
@@ -451,7 +452,7 @@ class MotionCore {
       const uint32_t at = drive_change(in, a);  // the edge after the update's
       const int16_t before = u_sel(r_, in, a);
       if (at <= n) r_.drv_cmd[a] = update(a);
-      const int16_t u = at < n ? u_sel(r_, in, a) : before;
+      const int16_t u = at < n ? updated(in, a) : before;
       r_.drv_u[a] = u;
       r_.dir[a] = u < 0;
     }
