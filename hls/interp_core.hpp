@@ -118,13 +118,28 @@ class InterpCore {
   }
 
   // One clock edge.
-  void clock(const InterpIn& in) {
+  void clock(const InterpIn& in) { clock_as<false>(in); }
+
+  // The fast-forwards below clock a running segment with no input many
+  // times: the same edge, compiled for that case.
+  void clock_running() { clock_as<true>(kNone); }
+
+ private:
+  static constexpr InterpIn kNone{};
+  bool ending_as(int st) const {
+    const bool final_q = ncross_ == nq_;
+    return st == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
+  }
+  template <bool RUNNING>
+  void clock_as(const InterpIn& in_arg) {
+    const InterpIn& in = RUNNING ? kNone : in_arg;
+    const int st = RUNNING ? int(ST_RUN) : st_;
     // --- Combinational values from the current state ---
     const int count = fifo_.count();
     const uint32_t fd = fifo_.rdata();
     const int ridx = ridx_;
     const bool line = type_ == seg::T_LINE, arc = type_ == seg::T_ARC;
-    const bool rd = st_ == ST_LOAD && widx_ < seg::SEG_WORDS && !in.abort;
+    const bool rd = st == ST_LOAD && widx_ < seg::SEG_WORDS && !in.abort;
     const bool ld = rv_ && !in.abort;
     const bool drop_n = wi_ == 0 ? DEPTH - count < seg::SEG_WORDS : drop_;
     const bool push = in.wr && !in.abort && !drop_n;
@@ -140,18 +155,18 @@ class InterpCore {
     const int c_addr = movex_ ? 4 : 5;
     const bool xlock = final_q && xeq_, ylock = final_q && yeq_;
     // The end of the segment, decided at tick step 5 (flags of this tick).
-    const bool fin = ending();
+    const bool fin = ending_as(st);
 
     // The operation of this clock.
     Op op;
     const int u = sq_;
-    if (st_ == ST_IDLE) {
+    if (st == ST_IDLE) {
       // After reset: the RTL's two RAM copies of V1 made equal, then
       // V1 - V1 = 0 into the zero word and the phase.
       if (ic_ != 1 && ic_ < INIT_STEPS) op = alu(true, 1, kInitAddr[ic_], W_BOTH);
-    } else if (st_ == ST_LOAD) {
+    } else if (st == ST_LOAD) {
       if (ld && ridx != seg::W_HDR) op = Op{true, false, 0, ridx, W_BOTH};  // V0 + word
-    } else if (st_ == ST_PREP) {
+    } else if (st == ST_PREP) {
       if (u == 0) op = alu(false, 0, 13, W_SWAP);
       if (u == 1) op = alu(false, 0, 14, W_BOTH);
       if (u >= 2 && u <= 4) op = alu(false, 0, 2 + u, line ? W_BOTH : W_NONE);
@@ -184,7 +199,7 @@ class InterpCore {
     const bool c16 = ((out ^ a ^ b) >> 16) & 1;                      // carry into bit 16
     constexpr int PHB = 16 - seg::TICK_LOG2;                         // accumulator bits in V12
     const uint32_t mask_hi = ((1u << 16) - 1) & ~((1u << PHB) - 1);  // carries out of the accumulator
-    const bool fire = st_ == ST_RUN && u == 1 && fen_ && (c16 || (out & mask_hi) != 0);
+    const bool fire = st == ST_RUN && u == 1 && fen_ && (c16 || (out & mask_hi) != 0);
 
     // --- Next state ---
     if (in.clr) underrun_ = ovf_ = false;
@@ -195,7 +210,7 @@ class InterpCore {
     }
 
     // The state RAM: reads of this edge see the old contents.
-    const Addr next = next_addr(c_addr);
+    const Addr next = next_addr(st, c_addr);
     const uint32_t ra_n = mem_[next.a], rb_n = mem_[next.b];
     if (op.we != W_NONE) {
       uint32_t& w = mem_[op.wa];
@@ -229,7 +244,7 @@ class InterpCore {
         yn_ = sign;
       }
     }
-    if (st_ == ST_RUN) {
+    if (st == ST_RUN) {
       if (u == 0) fen_ = !in.hold && !in.abort;
       if (u == 0 || u == 9) carry_ = cout;
       if (u == 9) carry9_ = cout;
@@ -277,7 +292,7 @@ class InterpCore {
     rv_ = rd;
     ridx_ = widx_;
 
-    switch (st_) {
+    switch (st) {
       case ST_IDLE:
         for (int ax = 0; ax < 3; ++ax)
           if (in.set >> ax & 1)
@@ -339,6 +354,7 @@ class InterpCore {
     }
   }
 
+ public:
   // Up to n clocks with no input while a segment runs, calm stretches at
   // once (skip_run), stopping before the clock that would end the segment
   // (the caller clocks that one, and what follows, itself). The last clock
@@ -376,10 +392,7 @@ class InterpCore {
         n, [](uint32_t) {}, false);
   }
   // The current clock ends the running segment (its end test, at tick step 5).
-  bool ending() const {
-    const bool final_q = ncross_ == nq_;
-    return st_ == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
-  }
+  bool ending() const { return ending_as(st_); }
 
   // Running fast-forward. After a calm tick (clock() says why), with no
   // iteration pending: each further tick that fires no iteration only adds
@@ -407,12 +420,12 @@ class InterpCore {
     // Between the phase's two adds (steps 0 and 1) the accumulator is split
     // across V11 and V12 with the carry in flight: that clock is clocked.
     if (n > 0 && sq_ == 1) {
-      clock(InterpIn{});
+      clock_running();
       --n;
     }
     const bool split_end = n > 0 && ((sq_ + n) & (TICK - 1)) == 1;
     calm_advance(split_end ? n - 1 : n);
-    if (split_end) clock(InterpIn{});
+    if (split_end) clock_running();
   }
 
   // Fast-forward: idle with less than a segment queued and no input, the
@@ -457,11 +470,11 @@ class InterpCore {
   };
   // The read addresses of the next clock's operation, by the current state
   // and step (the RTL's table).
-  Addr next_addr(int c) const {
+  Addr next_addr(int st, int c) const {
     const bool line = type_ == seg::T_LINE;
-    if (st_ == ST_IDLE) return {1, 1};  // init: V - V = 0
-    if (st_ == ST_LOAD) return {0, 3};
-    if (st_ == ST_PREP) {
+    if (st == ST_IDLE) return {1, 1};  // init: V - V = 0
+    if (st == ST_LOAD) return {0, 3};
+    if (st == ST_PREP) {
       switch (sq_) {
         case 0:
           return {1, 1};
@@ -521,7 +534,7 @@ class InterpCore {
       }
       const bool moves = sq_ == STEP_MOVE && go_;
       if (ending() || (still_last && done + 1 == n && moves)) break;
-      clock(none);
+      clock_running();
       ++done;
       if (moves) moved(done);
     }
@@ -552,7 +565,7 @@ class InterpCore {
     }
     if ((s1 == 0 || s1 > 9) && passes(9) > 0) carry_ = carry9_;
     sq_ = int(s1 + TICK - 1) & (TICK - 1);
-    const Addr a = next_addr(movex_ ? 4 : 5);
+    const Addr a = next_addr(st_, movex_ ? 4 : 5);
     sq_ = int(s1);
     ra_ = mem_[a.a];
     rb_ = mem_[a.b];

@@ -277,13 +277,18 @@ class MotionCore {
   bool quiet_busy(const In& in, uint32_t n) const { return quiet_as(in, n, Let{false, true, true}); }
   template <typename Moved>
   uint32_t skip_busy(const In& in, uint32_t n, Moved&& moved) {
+    return skip_busy_as(in, n, Let{false, true, true}, moved);
+  }
+  // The same after quiet_as(in, .., let), let.busy set.
+  template <typename Moved>
+  uint32_t skip_busy_as(const In& in, uint32_t n, Let let, Moved&& moved) {
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
       n = ip_.run_for(n, moved);
       if (n == 0) return 0;
     } else {
       skip_interp(n);
     }
-    skip_others(n, &in, Let{false, true, true});
+    skip_others(n, &in, let);
     return n;
   }
   uint32_t skip_busy(const In& in, uint32_t n) {
@@ -348,6 +353,18 @@ class MotionCore {
     uint32_t r = d == 0 || d >= P ? max : (c < d ? d - c : P - c) / k;
     if (at != kNoChange && !after) r = std::min(r, (at - from) / k);
     return std::min(r, max);
+  }
+  // Axis a's drive value (drv_u) over the clocks of such a stretch: the
+  // register's in its first clock, then the value it follows from the drive
+  // command up to clock `change` (drive_change()), and the sweep's update
+  // in the clocks after it.
+  struct DriveSteps {
+    int16_t first, then, after;
+    uint32_t change;
+    int16_t at(uint32_t clock) const { return clock == 0 ? first : clock <= change ? then : after; }
+  };
+  DriveSteps drive_steps(const In& in, int a) const {
+    return {r_.drv_u[a], u_sel(r_, in, a), updated(in, a), drive_change(in, a)};
   }
   // The first edge of the stretch whose pin the sweep's drive update sets
   // (its clock's edge is the update, the next the drive value's), or

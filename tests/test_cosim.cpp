@@ -35,26 +35,33 @@ void print(const RunResult& r) {
 // The twin-only path and the RTL path: the same controller outputs, sample
 // for sample, hence the same plant motion.
 TEST(Cosim, TwinAndRtlGiveIdenticalOutputs) {
-  for (const char* sc : {"step", "circle"}) {
-    // Records every 10 us, as `motionctl cosim` takes them: most fall inside
-    // the twin's jumps, some after a move of the command there.
-    RunSpec s = spec_for("fpga-100us", sc, Engine::Rtl);
-    s.record_dt_s = 1e-5;
-    const RunResult rtl = run_isolated(s);
-    s.engine = Engine::Twin;
-    const RunResult twin = run_isolated(s);
-    print(rtl);
-    print(twin);
-    ASSERT_GT(rtl.sample_u[0].size(), 100u);
-    EXPECT_EQ(rtl.sample_clock, twin.sample_clock);
-    EXPECT_EQ(rtl.sample_u[0], twin.sample_u[0]);
-    EXPECT_EQ(rtl.sample_u[1], twin.sample_u[1]);
-    EXPECT_EQ(rtl.pos_m[0], twin.pos_m[0]);
-    EXPECT_EQ(rtl.pos_m[1], twin.pos_m[1]);
-    EXPECT_EQ(rtl.cmd_m[0], twin.cmd_m[0]);
-    EXPECT_EQ(rtl.cmd_m[1], twin.cmd_m[1]);
-    EXPECT_GT(twin.clocks_skipped, 0u);
-  }
+  // 1207 clocks a sample: the tick, hence each drive update the twin's
+  // jumps go through, falls at every clock of a plant step in turn (at
+  // 100 us, always at the same one).
+  const MachineConfig m = machine::default_machine();
+  const Platform odd{"fpga-1207", false, 1207 / m.clock_hz};
+  for (const Platform& p : {find_platform(m, "fpga-100us"), odd})
+    for (const char* sc : {"step", "circle"}) {
+      // Records every 10 us, as `motionctl cosim` takes them: most fall inside
+      // the twin's jumps, some after a move of the command there.
+      RunSpec s = spec_for("fpga-100us", sc, Engine::Rtl);
+      s.platform = p;
+      s.record_dt_s = 1e-5;
+      const RunResult rtl = run_isolated(s);
+      s.engine = Engine::Twin;
+      const RunResult twin = run_isolated(s);
+      print(rtl);
+      print(twin);
+      ASSERT_GT(rtl.sample_u[0].size(), 100u);
+      EXPECT_EQ(rtl.sample_clock, twin.sample_clock);
+      EXPECT_EQ(rtl.sample_u[0], twin.sample_u[0]);
+      EXPECT_EQ(rtl.sample_u[1], twin.sample_u[1]);
+      EXPECT_EQ(rtl.pos_m[0], twin.pos_m[0]);
+      EXPECT_EQ(rtl.pos_m[1], twin.pos_m[1]);
+      EXPECT_EQ(rtl.cmd_m[0], twin.cmd_m[0]);
+      EXPECT_EQ(rtl.cmd_m[1], twin.cmd_m[1]);
+      EXPECT_GT(twin.clocks_skipped, 0u);
+    }
 }
 
 // The PC platform: deterministic for a seed, and the seed matters (the

@@ -22,10 +22,13 @@ using CoreIn = CoreTwin::In;
 using CoreOut = CoreTwin::Out;
 
 // What a fast-forward skipped: the outputs of its first clock and the PWM
-// counter then, from which the drive over the skipped clocks follows.
+// counter then, from which the drive over the skipped clocks follows, and
+// each axis's drive value over them (the sweep may update it meanwhile).
+using DriveSteps = CoreTwin::DriveSteps;
 struct Skipped {
   CoreOut first;
   uint32_t pwm0 = 0;
+  DriveSteps drive[kCoreAxes] = {};
 };
 // A skip's change of the position command: after its clock-th edge (from
 // 1) the command is cmd.
@@ -56,24 +59,34 @@ class CoreModel {
   }
   // This clock's outputs, without the edge (the twin).
   virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
+  // Axis a's drive value over the clocks that skip(in, ..) would do (the
+  // twin).
+  virtual DriveSteps drive_steps(const CoreIn& /*in*/, int /*a*/) const { return {}; }
   // The position command now (the twin; after a skip).
   virtual int32_t cmd(int /*a*/) const { return 0; }
 };
 
+// drive: skips may go through the sweep's drive updates (a user that
+// integrates the drive value over a skip from Skipped::drive); else they
+// end before each.
 class TwinCore final : public CoreModel {
  public:
+  explicit TwinCore(bool drive = false) : let_{false, true, true, drive} {}
   CoreOut cycle(const CoreIn& in) override {
     const CoreOut o = used_outputs();
     twin_.clock(in);
     return o;
   }
   uint32_t quiet_clocks(const CoreIn& in, uint32_t limit) const override {
-    const uint32_t n = std::min(limit, twin_.quiet_limit_busy());
-    return n > 0 && twin_.quiet_busy(in, n) ? n : 0;
+    const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
+    return n > 0 && twin_.quiet_as(in, n, let_) ? n : 0;
   }
+  DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
   uint32_t skip(const CoreIn& in, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
-    first = Skipped{used_outputs(), twin_.pwm_count()};
-    return twin_.skip_busy(in, n, [&](uint32_t clock) {
+    first.first = used_outputs();
+    first.pwm0 = twin_.pwm_count();
+    for (int a = 0; a < kCoreAxes; ++a) first.drive[a] = twin_.drive_steps(in, a);
+    return twin_.skip_busy_as(in, n, let_, [&](uint32_t clock) {
       CmdChange c;
       c.clock = clock;
       for (int a = 0; a < kCoreAxes; ++a) c.cmd[a] = twin_.interp().pos(a);
@@ -103,6 +116,7 @@ class TwinCore final : public CoreModel {
     }
     return o;
   }
+  CoreTwin::Let let_;
   CoreTwin twin_;
 };
 

@@ -371,7 +371,11 @@ class Machine {
         dac_[a] = d;
       }
     } else {
-      core_ = s_.engine == Engine::Rtl ? make_rtl_core(s_.fst_path) : std::make_unique<TwinCore>();
+      // The averaged drive is integrated over skips that go through the
+      // sweep's updates (add_skip_volts); switching pins are not.
+      bool averaged = true;
+      for (int a = 0; a < kCoreAxes; ++a) averaged = averaged && !switching(m.axes[size_t(a)].drive);
+      core_ = s_.engine == Engine::Rtl ? make_rtl_core(s_.fst_path) : std::make_unique<TwinCore>(averaged);
       configure_core();
     }
     res_.platform = s_.platform.name;
@@ -518,9 +522,8 @@ class Machine {
     const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
     uint64_t most = q / k_;
     if (most == 0) return false;
-    const CoreOut o = core_->peek(in_);
-    double v[kCoreAxes];
-    for (int a = 0; a < kCoreAxes; ++a) v[a] = clock_volts(a, o);
+    Skipped sk;
+    for (int a = 0; a < kCoreAxes; ++a) sk.drive[a] = core_->drive_steps(in_, a);
     // The first record in the stretch, counted in steps from here (none
     // before the command starts).
     const uint64_t first =
@@ -530,10 +533,9 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       ahead_[size_t(a)] = plant_[size_t(a)];
       sampled_[a].clear();
-      ahead_steps_[a] = ahead_[size_t(a)].hold(v[a], most, {first, record_every_, &sampled_[a]});
+      ahead_steps_[a] = hold_driven(ahead_[size_t(a)], a, sk, most, first, &sampled_[a]);
       most = std::min(most, ahead_steps_[a]);
     }
-    Skipped sk;
     int32_t cmd[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd[a] = core_->cmd(a);
     moves_.clear();
@@ -543,7 +545,7 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)] = ahead_[size_t(a)];
-      else if (plant_[size_t(a)].hold(v[a], whole) != whole)
+      else if (hold_driven(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr) != whole)
         throw std::logic_error("co-simulation: a held plant changed its count early");
     }
     // The records: a step's command is the one its last clock showed, after
@@ -567,10 +569,50 @@ class Machine {
     res_.clocks_skipped += m;
     if (const uint32_t rem = m % k_; rem > 0) {
       StepVolts before[kCoreAxes];
-      for (int a = 0; a < kCoreAxes; ++a) before[a].add(v[a], rem);
+      for (int a = 0; a < kCoreAxes; ++a) add_skip_volts(before[a], a, sk, whole * k_, rem);
       fpga_step(rem, before);
     }
     return true;
+  }
+
+  // Up to n whole plant steps of a skip that sk.drive describes, as the
+  // clock path takes them (each step on the mean of its clocks' volts,
+  // StepVolts), stopping after the first that changes the count; positions
+  // sampled after steps first, first + record_every_, ... (from 1) into
+  // *out. Returns the steps taken.
+  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
+                       std::vector<double>* out) {
+    const DriveSteps& ds = sk.drive[a];
+    // The clocks at which the drive value changes: 1, change + 1, or neither.
+    constexpr uint64_t kNever = ~uint64_t(0);
+    const uint64_t changes[2] = {
+        ds.first != ds.then ? 1 : kNever,
+        ds.change != CoreTwin::kNoChange && ds.after != ds.then ? ds.change + 1ull : kNever};
+    uint64_t s = 0;
+    while (s < n) {
+      const uint64_t c0 = s * k_;
+      uint64_t next = kNever;
+      for (const uint64_t c : changes)
+        if (c > c0) next = std::min(next, c);
+      uint64_t len;
+      double v;
+      if (next < c0 + k_) {
+        // A change inside this step: the mean of its pieces.
+        StepVolts sv;
+        add_skip_volts(sv, a, sk, c0, k_);
+        v = sv.mean(k_);
+        len = 1;
+      } else {
+        v = averaged_volts(a, ds.at(uint32_t(std::min<uint64_t>(c0, ~0u))));
+        len = std::min(n, next / k_) - s;
+      }
+      // The records in this piece, counted from its start.
+      const uint64_t rel = first > s ? first - s : record_every_ - (s - first) % record_every_;
+      const uint64_t t = p.hold(v, len, {rel, record_every_, out});
+      s += t;
+      if (t < len) break;
+    }
+    return s;
   }
 
   // Encoder pins: the counts the plant reached at the start of the step are
@@ -678,7 +720,7 @@ class Machine {
           moves_.clear();
           if (const uint32_t m = core_->skip(in_, n, sk, moves_); m > 0) {
             for (int a = 0; a < kCoreAxes; ++a) {
-              add_skipped(volts[a], a, sk.first, sk.pwm0, m);
+              add_skip_volts(volts[a], a, sk, 0, m);
               cmd_now_[a] = core_->cmd(a);
             }
             res_.clocks_skipped += m;
@@ -717,25 +759,42 @@ class Machine {
 
   double clock_volts(int a, const CoreOut& o) {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
-    if (!switching(d)) {
-      // The drive value changes once a sample: convert it then.
-      if (o.drv_u[a] != volts_u_[a] || !volts_set_[a]) {
-        volts_u_[a] = o.drv_u[a];
-        volts_v_[a] = drive_volts(d, o.drv_u[a]);
-        volts_set_[a] = true;
-      }
-      return volts_v_[a];
-    }
+    if (!switching(d)) return averaged_volts(a, o.drv_u[a]);
     if (!o.drv_en[a] || !o.pwm[a]) return 0;
     return o.dir[a] ? -d.supply_v : d.supply_v;
   }
-  // n quiet clocks: the drive value holds; the PWM pin follows the counter.
-  void add_skipped(StepVolts& volts, int a, const CoreOut& o, uint32_t p0, uint32_t n) {
+  // The averaged drive's volts for a drive value.
+  double averaged_volts(int a, int16_t u) {
+    // The drive value changes once a sample: convert it then.
+    if (u != volts_u_[a] || !volts_set_[a]) {
+      volts_u_[a] = u;
+      volts_v_[a] = drive_volts(s_.machine.axes[size_t(a)].drive, u);
+      volts_set_[a] = true;
+    }
+    return volts_v_[a];
+  }
+  // Clocks from .. from + n - 1 of a skip: the drive value as it steps
+  // (DriveSteps), or the PWM pin following the counter.
+  void add_skip_volts(StepVolts& volts, int a, const Skipped& sk, uint64_t from, uint64_t n) {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
     if (!switching(d)) {
-      volts.add(clock_volts(a, o), n);
+      const DriveSteps& ds = sk.drive[a];
+      // Its pieces: clock 0, clocks 1 .. change, and the rest.
+      const uint64_t end = from + n, bounds[3] = {1, uint64_t(ds.change) + 1, end};
+      for (uint64_t c = from, i = 0; c < end; ++i) {
+        const uint64_t to = std::min(bounds[i], end);
+        if (to <= c) continue;
+        volts.add(averaged_volts(a, ds.at(uint32_t(std::min<uint64_t>(c, ~0u)))), uint32_t(to - c));
+        c = to;
+      }
       return;
     }
+    add_skipped(volts, a, sk.first, sk.pwm0, uint32_t(n));
+  }
+  // n quiet clocks of a switching drive: the drive value holds (skips end
+  // before the sweep's updates); the PWM pin follows the counter.
+  void add_skipped(StepVolts& volts, int a, const CoreOut& o, uint32_t p0, uint32_t n) {
+    const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
     const double v = o.dir[a] ? -d.supply_v : d.supply_v;
     const uint32_t duty = CoreTwin::duty(o.drv_u[a]), mask = (1u << CoreTwin::pwm_bits) - 1;
     for (uint32_t k = 0; k < n; ++k) {
