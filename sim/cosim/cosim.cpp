@@ -510,18 +510,27 @@ class Machine {
   // and samples are the clock path's (Cosim.TwinAndRtlGiveIdenticalOutputs).
   // The records inside take the plants' positions sampled along the hold
   // and the command as the core's moves left it at each. A jump ends after
-  // the step in which a count changes (that edge is shown clock by clock),
-  // or inside a step, where the core stops before a segment ends.
+  // the step in which a count changes; the next one shows the change as
+  // fpga_step does, an edge at its clock 0 (more than one edge an axis:
+  // fpga_step shows them). It ends inside a step where the core stops
+  // before an event, or a segment's end.
   bool jump(uint64_t target) {
     if (s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
-    for (int a = 0; a < kCoreAxes; ++a)
-      if (switching(s_.machine.axes[size_t(a)].drive) || plant_[size_t(a)].encoder_count() != shown_[a])
-        return false;
+    bool edge = false;
+    for (int a = 0; a < kCoreAxes; ++a) {
+      const int64_t d = plant_[size_t(a)].encoder_count() - shown_[a];
+      if (switching(s_.machine.axes[size_t(a)].drive) || d < -1 || d > 1) return false;
+      edge = edge || d != 0;
+    }
+    if (edge) {
+      emit_plan();
+      set_encoder_pins(0);
+    }
     uint64_t steps = target - step_;
     if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
     const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
+    if (q == 0) return false;
     uint64_t most = q / k_;
-    if (most == 0) return false;
     Skipped sk;
     for (int a = 0; a < kCoreAxes; ++a) sk.drive[a] = core_->drive_steps(in_, a);
     // The first record in the stretch, counted in steps from here (none
@@ -529,20 +538,23 @@ class Machine {
     const uint64_t first =
         step_ < start_step_ ? most + 1 : record_every_ - (step_ - start_step_) % record_every_;
     // The plants up to the first count change of either, sampled at the
-    // records.
-    for (int a = 0; a < kCoreAxes; ++a) {
+    // records. Where neither changes, the skip goes on into the step after
+    // (fpga_step finishes it).
+    bool into_next = true;
+    for (int a = 0; a < kCoreAxes && most > 0; ++a) {
       ahead_[size_t(a)] = plant_[size_t(a)];
       sampled_[a].clear();
       ahead_steps_[a] = hold_driven(ahead_[size_t(a)], a, sk, most, first, &sampled_[a]);
+      into_next = into_next && ahead_steps_[a] == most && ahead_[size_t(a)].encoder_count() == shown_[a];
       most = std::min(most, ahead_steps_[a]);
     }
     int32_t cmd[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd[a] = core_->cmd(a);
     moves_.clear();
-    const uint32_t m = core_->skip(in_, uint32_t(most * k_), sk, moves_);
+    const uint32_t m = core_->skip(in_, into_next ? q : uint32_t(most * k_), sk, moves_);
     if (m == 0) return false;
     const uint64_t whole = m / k_;
-    for (int a = 0; a < kCoreAxes; ++a) {
+    for (int a = 0; a < kCoreAxes && whole > 0; ++a) {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)] = ahead_[size_t(a)];
       else if (hold_driven(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr) != whole)
@@ -640,6 +652,16 @@ class Machine {
     return c;
   }
 
+  // The pins of clock c of this step (emit_plan).
+  void set_encoder_pins(uint32_t c) {
+    for (int a = 0; a < kCoreAxes; ++a) {
+      const QuadPins p = quadrature_pins(emitted(a, c), s_.machine.axes[size_t(a)].encoder_cpr);
+      in_.enc_a[a] = p.a;
+      in_.enc_b[a] = p.b;
+      in_.enc_z[a] = p.z;
+    }
+  }
+
   void host_step() {
     const double t = double(step_) * dt();
     for (int a = 0; a < kCoreAxes; ++a)
@@ -702,12 +724,7 @@ class Machine {
     uint32_t c = c0;
     while (c < k_) {
       // The pins change only while edges are due (up to clock settle).
-      for (int a = 0; a < kCoreAxes && c <= settle; ++a) {
-        const QuadPins p = quadrature_pins(emitted(a, c), s_.machine.axes[size_t(a)].encoder_cpr);
-        in_.enc_a[a] = p.a;
-        in_.enc_b[a] = p.b;
-        in_.enc_z[a] = p.z;
-      }
+      if (c <= settle) set_encoder_pins(c);
       command_inputs(in_, c);
       // The step's position goes in clock 0 of the start; its first clock is
       // never skipped (the existing runs' schedule).
