@@ -61,7 +61,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
+#include <utility>
 
 #include "interp_seg.hpp"
 #include "mc_fixed.hpp"
@@ -121,16 +123,25 @@ class InterpCore {
   void clock(const InterpIn& in) { clock_as<false>(in); }
 
   // The fast-forwards below clock a running segment with no input many
-  // times: the same edge, compiled for that case.
-  void clock_running() { clock_as<true>(kNone); }
+  // times: the same edge, compiled for that case and each tick step.
+  void clock_running() {
+    static constexpr auto kSteps = running_steps(std::make_index_sequence<TICK>{});
+    (this->*kSteps[size_t(sq_)])(kNone);
+  }
 
  private:
   static constexpr InterpIn kNone{};
-  bool ending_as(int st) const {
-    const bool final_q = ncross_ == nq_;
-    return st == ST_RUN && sq_ == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
+  template <size_t... S>
+  static constexpr auto running_steps(std::index_sequence<S...>) {
+    return std::array<void (InterpCore::*)(const InterpIn&), TICK>{&InterpCore::clock_as<true, int(S)>...};
   }
-  template <bool RUNNING>
+  bool ending_as(int st, int u) const {
+    const bool final_q = ncross_ == nq_;
+    return st == ST_RUN && u == 5 && (!nz_ || (type_ == seg::T_ARC && final_q && xeq_ && yeq_));
+  }
+  // RUNNING: a running segment, no input; STEP: the tick step sq_ (-1:
+  // read it).
+  template <bool RUNNING, int STEP = -1>
   void clock_as(const InterpIn& in_arg) {
     const InterpIn& in = RUNNING ? kNone : in_arg;
     const int st = RUNNING ? int(ST_RUN) : st_;
@@ -155,11 +166,11 @@ class InterpCore {
     const int c_addr = movex_ ? 4 : 5;
     const bool xlock = final_q && xeq_, ylock = final_q && yeq_;
     // The end of the segment, decided at tick step 5 (flags of this tick).
-    const bool fin = ending_as(st);
+    const int u = STEP >= 0 ? STEP : sq_;
+    const bool fin = ending_as(st, u);
 
     // The operation of this clock.
     Op op;
-    const int u = sq_;
     if (st == ST_IDLE) {
       // After reset: the RTL's two RAM copies of V1 made equal, then
       // V1 - V1 = 0 into the zero word and the phase.
@@ -179,8 +190,8 @@ class InterpCore {
       if (u == 5) op = alu(myn, myn, 0, W_NONE);
       if (u == 6) op = alu(true, 0, 1, go_ ? W_BOTH : W_NONE);
       if (line && u >= 7 && u <= 9) op = alu(true, 1, u, go_ ? W_BOTH : W_NONE);
-      if (line && u >= 10 && u <= 12)
-        op = alu(false, 0, u - 3, go_ && ((lmv_ >> (u - 10)) & 1) ? W_BOTH : W_NONE);
+      if (line && u >= 10 && u <= 12)  // & 3 as at steps 7..9 below
+        op = alu(false, 0, u - 3, go_ && ((lmv_ >> ((u - 10) & 3)) & 1) ? W_BOTH : W_NONE);
       if (arc) {
         const bool dn = !outw_;  // inward: inc -= k
         if (u == 7 || u == 10) op = alu(neg_m_, neg_m_, 8, go_ ? W_BOTH : W_NONE);
@@ -210,7 +221,7 @@ class InterpCore {
     }
 
     // The state RAM: reads of this edge see the old contents.
-    const Addr next = next_addr(st, c_addr);
+    const Addr next = next_addr(st, u, c_addr);
     const uint32_t ra_n = mem_[next.a], rb_n = mem_[next.b];
     if (op.we != W_NONE) {
       uint32_t& w = mem_[op.wa];
@@ -251,7 +262,11 @@ class InterpCore {
       if (u == 1 && fire) pend_ = pend_ == 3 ? 3 : pend_ + 1;
       if (u == 3) xeq_ = zero;
       if (u == 4) yeq_ = zero;
-      if (line && u >= 7 && u <= 9) lmv_ = (lmv_ & ~(1 << (u - 7))) | int(sign || zero) << (u - 7);
+      if (line && u >= 7 && u <= 9) {
+        // (& 3: the axis, and no negative shift in the other steps' instantiations)
+        const int ax = (u - 7) & 3;
+        lmv_ = (lmv_ & ~(1 << ax)) | int(sign || zero) << ax;
+      }
       if (u == 6 && go_) nz_ = !zero;
       if (arc && u == 8 && go_) {
         if (movex_) {
@@ -317,7 +332,7 @@ class InterpCore {
         sq_ = sq_ == PREP_STEPS - 1 ? 0 : sq_ + 1;
         break;
       default:
-        sq_ = (sq_ + 1) & (TICK - 1);
+        sq_ = (u + 1) & (TICK - 1);
         if (fin) {
           st_ = ST_IDLE;
           seg_cnt_ = (seg_cnt_ + 1) & 0xFFFF;
@@ -392,7 +407,7 @@ class InterpCore {
         n, [](uint32_t) {}, false);
   }
   // The current clock ends the running segment (its end test, at tick step 5).
-  bool ending() const { return ending_as(st_); }
+  bool ending() const { return ending_as(st_, sq_); }
 
   // Running fast-forward. After a calm tick (clock() says why), with no
   // iteration pending: each further tick that fires no iteration only adds
@@ -470,12 +485,12 @@ class InterpCore {
   };
   // The read addresses of the next clock's operation, by the current state
   // and step (the RTL's table).
-  Addr next_addr(int st, int c) const {
+  Addr next_addr(int st, int u, int c) const {
     const bool line = type_ == seg::T_LINE;
     if (st == ST_IDLE) return {1, 1};  // init: V - V = 0
     if (st == ST_LOAD) return {0, 3};
     if (st == ST_PREP) {
-      switch (sq_) {
+      switch (u) {
         case 0:
           return {1, 1};
         case 1:
@@ -490,7 +505,7 @@ class InterpCore {
           return {1, 0};
       }
     }
-    switch (sq_) {
+    switch (u) {
       case 15:
         return {11, 2};
       case 0:
@@ -564,8 +579,8 @@ class InterpCore {
       if (s1 >= 2 && s1 <= 9) carry_ = ((before & 0xFFFFFFFFu) + (inc & 0xFFFFFFFFu)) >> 32;
     }
     if ((s1 == 0 || s1 > 9) && passes(9) > 0) carry_ = carry9_;
-    sq_ = int(s1 + TICK - 1) & (TICK - 1);
-    const Addr a = next_addr(st_, movex_ ? 4 : 5);
+    // The ports as the clock before s1 addressed them.
+    const Addr a = next_addr(st_, int(s1 + TICK - 1) & (TICK - 1), movex_ ? 4 : 5);
     sq_ = int(s1);
     ra_ = mem_[a.a];
     rb_ = mem_[a.b];
