@@ -205,6 +205,23 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
     uint32_t to = cuts[i];
     if (to == from) continue;
     if (event(to)) {
+      // The step at which the speed at `from` would reach the next count
+      // is most often the event's or next to it: probed with its neighbour
+      // first, it narrows what the bisection has left. Both keep the first
+      // step with the event (the piece is monotone).
+      const Eigen::Vector3d x = run_state(from);
+      const double per_step = x(1) * dt_, edge = double(per_step > 0 ? count + 1 : count) / rad_to_count_;
+      const double ahead = per_step != 0 ? (edge - x(2)) / per_step : -1;
+      if (ahead > 0 && ahead < double(to - from - 1)) {
+        const uint32_t g = from + std::max<uint32_t>(1, uint32_t(std::ceil(ahead)));
+        if (event(g)) {
+          to = g;
+          if (to - from > 1) (event(g - 1) ? to : from) = g - 1;
+        } else {
+          from = g;
+          if (to - from > 1) (event(g + 1) ? to : from) = g + 1;
+        }
+      }
       while (to - from > 1) {
         const uint32_t mid = from + (to - from) / 2;
         (event(mid) ? to : from) = mid;
