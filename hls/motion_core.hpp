@@ -251,6 +251,11 @@ class MotionCore {
     // stretch, drive_change() where they change. Done and the tick stay
     // out (quiet_limit_as).
     bool drive = false;
+    // With n = 1: the clock may be the PID's (the one before the tick or
+    // done, the tick, done) or the sample port's (after done), which the
+    // caller clock()s: quiet but for them (a stretch that goes through a
+    // sample, drive_steps() telling the drive up to the next sweep's).
+    bool sample = false;
   };
   bool quiet_as(const In& in, uint32_t n, Let let) const {
     return quiet_but_interp(in, n, let) && interp_quiet(in, n, let.busy);
@@ -366,6 +371,11 @@ class MotionCore {
   DriveSteps drive_steps(const In& in, int a) const {
     return {r_.drv_u[a], u_sel(r_, in, a), updated(in, a), drive_change(in, a)};
   }
+  // The clocks from this one over which drive_steps() tells the drive: up
+  // to the first that the next sample's sweep updates.
+  uint32_t known_drive_clocks() const {
+    return (pid_.tick() ? 0 : pid_.timer()) + uint32_t(drv_clock(0)) + 2;
+  }
   // The first edge of the stretch whose pin the sweep's drive update sets
   // (its clock's edge is the update, the next the drive value's), or
   // kNoChange.
@@ -423,8 +433,9 @@ class MotionCore {
       for (int a = 0; a < NAXES; ++a)
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
     }
-    if (!let.port && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
-    if (!pid_.quiet(pid_in(in, nullptr, nullptr), n)) return false;
+    if (!let.port && !let.sample && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
+    const typename Pid::In pi = pid_in(in, nullptr, nullptr);
+    if (!(let.sample ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n))) return false;
     for (int a = 0; a < NAXES; ++a) {
       const QuadIn qi = quad_in(in, a, false);
       if (!(let.settle ? dec_[a].settle_clocks(qi) != Decoder::kUnsettled : dec_[a].quiet(qi)) ||

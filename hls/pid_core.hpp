@@ -259,6 +259,8 @@ class PidCoreClocked {
   bool quiet(const In& in, uint32_t n) const {
     return !in.rst && !in.we && !in.re && !clr_ && !tick_ && !done_ && !rvalid_ && n < quiet_limit() + 1;
   }
+  // No port activity and not clearing: what quiet() asks but the timers.
+  bool quiet_but_timers(const In& in) const { return !in.rst && !in.we && !in.re && !clr_; }
   void skip(uint32_t n) {
     tcnt_ -= n;
     if (run_) left_ -= int(n);

@@ -60,8 +60,17 @@ class CoreModel {
   // This clock's outputs, without the edge (the twin).
   virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
   // Axis a's drive value over the clocks that skip(in, ..) would do (the
-  // twin).
+  // twin)...
   virtual DriveSteps drive_steps(const CoreIn& /*in*/, int /*a*/) const { return {}; }
+  // ... and over how many clocks from this one, skips and sample clocks
+  // alike: up to the next sample's first drive update.
+  virtual uint32_t known_drive_clocks() const { return 0; }
+  // This clock is not quiet only because it is the PID's or the sample
+  // port's (CoreTwin::Let::sample), and leaves the interpolator's segment
+  // running: a jump cycles it (the twin).
+  virtual bool sample_clock(const CoreIn& /*in*/) const { return false; }
+  // This clock ends the running segment (the twin).
+  virtual bool segment_ends() const { return false; }
   // The position command now (the twin; after a skip).
   virtual int32_t cmd(int /*a*/) const { return 0; }
 };
@@ -82,6 +91,13 @@ class TwinCore final : public CoreModel {
     return n > 0 && twin_.quiet_as(in, n, let_) ? n : 0;
   }
   DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
+  uint32_t known_drive_clocks() const override { return twin_.known_drive_clocks(); }
+  bool sample_clock(const CoreIn& in) const override {
+    CoreTwin::Let let = let_;
+    let.sample = true;
+    return let_.drive && twin_.quiet_as(in, 1, let) && !segment_ends();
+  }
+  bool segment_ends() const override { return twin_.interp().ending(); }
   uint32_t skip(const CoreIn& in, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
     first.first = used_outputs();
     first.pwm0 = twin_.pwm_count();

@@ -528,30 +528,27 @@ class Machine {
     }
     uint64_t steps = target - step_;
     if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
-    const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(steps * k_, 1u << 30)));
-    if (q == 0) return false;
-    uint64_t most = q / k_;
+    // Whole steps, up to where the next sample's sweep changes the drive.
+    uint64_t most = std::min<uint64_t>(steps * k_, core_->known_drive_clocks()) / k_;
+    if (most == 0) return false;
     Skipped sk;
     for (int a = 0; a < kCoreAxes; ++a) sk.drive[a] = core_->drive_steps(in_, a);
+    const int level = core_->peek(in_).seg_count;
     // The first record in the stretch, counted in steps from here (none
     // before the command starts).
     const uint64_t first =
         step_ < start_step_ ? most + 1 : record_every_ - (step_ - start_step_) % record_every_;
     // The plants up to the first count change of either, sampled at the
-    // records. Where neither changes, the skip goes on into the step after
-    // (fpga_step finishes it).
-    bool into_next = true;
-    for (int a = 0; a < kCoreAxes && most > 0; ++a) {
+    // records.
+    for (int a = 0; a < kCoreAxes; ++a) {
       ahead_[size_t(a)] = plant_[size_t(a)];
       sampled_[a].clear();
       ahead_steps_[a] = hold_driven(ahead_[size_t(a)], a, sk, most, first, &sampled_[a]);
-      into_next = into_next && ahead_steps_[a] == most && ahead_[size_t(a)].encoder_count() == shown_[a];
       most = std::min(most, ahead_steps_[a]);
     }
     int32_t cmd[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd[a] = core_->cmd(a);
-    moves_.clear();
-    const uint32_t m = core_->skip(in_, into_next ? q : uint32_t(most * k_), sk, moves_);
+    const uint64_t m = advance_core(most * k_);
     if (m == 0) return false;
     const uint64_t whole = m / k_;
     for (int a = 0; a < kCoreAxes && whole > 0; ++a) {
@@ -577,14 +574,57 @@ class Machine {
     }
     step_ += whole;
     for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = core_->cmd(a);
-    if (step_ >= start_step_) feed_.clocked(sk.first.seg_count, false);
-    res_.clocks_skipped += m;
-    if (const uint32_t rem = m % k_; rem > 0) {
+    if (step_ >= start_step_) feed_.clocked(level, false);
+    if (const uint32_t rem = uint32_t(m % k_); rem > 0) {
       StepVolts before[kCoreAxes];
       for (int a = 0; a < kCoreAxes; ++a) add_skip_volts(before[a], a, sk, whole * k_, rem);
       fpga_step(rem, before);
     }
     return true;
+  }
+
+  // Up to n clocks of the core from the start of this step, the pins held:
+  // the quiet stretches skipped, the clocks of a PID sample cycled (the
+  // sample's output recorded at done, as fpga_step does a clock later).
+  // Ends early before anything else (a segment's end). moves_ gets the
+  // command's changes, counted in clocks from here. Returns the clocks done.
+  uint64_t advance_core(uint64_t n) {
+    moves_.clear();
+    const uint64_t at = step_ * k_;
+    uint64_t done = 0;
+    while (done < n) {
+      if (const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)));
+          q > 0) {
+        Skipped sk;
+        const size_t from = moves_.size();
+        const uint32_t m = core_->skip(in_, q, sk, moves_);
+        for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
+        done += m;
+        res_.clocks_skipped += m;
+        if (m > 0) continue;
+      }
+      // A skip stops before a clock that moves the command last, or that
+      // ends the segment: the first is cycled here, the second not.
+      if (core_->segment_ends() || (!core_->sample_clock(in_) && core_->quiet_clocks(in_, 1) == 0)) break;
+      const CoreOut o = core_->cycle(in_);
+      ++res_.clocks_cycled;
+      ++done;
+      res_.underrun = res_.underrun || o.ip_underrun;
+      bool moved = false;
+      CmdChange c;
+      c.clock = uint32_t(done);
+      for (int a = 0; a < kCoreAxes; ++a) {
+        c.cmd[a] = core_->cmd(a);
+        moved = moved || c.cmd[a] != o.cmd[a];
+      }
+      if (moved) moves_.push_back(c);
+      if (o.done && (at + done) / k_ >= start_step_) {
+        const CoreOut after = core_->peek(in_);
+        res_.sample_clock.push_back(at + done - 1);
+        for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(after.drv_cmd[a]);
+      }
+    }
+    return done;
   }
 
   // Up to n whole plant steps of a skip that sk.drive describes, as the
@@ -595,6 +635,7 @@ class Machine {
   uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
                        std::vector<double>* out) {
     const DriveSteps& ds = sk.drive[a];
+    const int64_t count = p.encoder_count();
     // The clocks at which the drive value changes: 1, change + 1, or neither.
     constexpr uint64_t kNever = ~uint64_t(0);
     const uint64_t changes[2] = {
@@ -622,7 +663,9 @@ class Machine {
       const uint64_t rel = first > s ? first - s : record_every_ - (s - first) % record_every_;
       const uint64_t t = p.hold(v, len, {rel, record_every_, out});
       s += t;
-      if (t < len) break;
+      // hold() counts from its own start: a piece that ends on the change
+      // takes all its steps.
+      if (t < len || p.encoder_count() != count) break;
     }
     return s;
   }
