@@ -206,21 +206,27 @@ class MotionCore {
       ip_.reset();
       ip_still_ = 0;
     } else if (!ip_.quiet(ii)) {
-      ip_.clock(ii);
+      if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN && ii == InterpIn{})
+        ip_.clock_running();
+      else
+        ip_.clock(ii);
       ip_still_ = 0;
     } else if (ip_still_ < 2) {
       ip_.clock(ii);
       ++ip_still_;
     }
 
-    // A settled decoder only ages its last edge: skip(1) is that clock, for
-    // much less work than step() (the clocks with pin activity step).
+    // A settled decoder only ages its last edge, and at a tick publishes
+    // its velocity and age: skip(1) and skip_sampled() are those clocks,
+    // for much less work than step() (the clocks with pin activity step).
     for (int a = 0; a < NAXES; ++a) {
       const QuadIn qi = quad_in(in, a, tick);
-      if (dec_[a].quiet(qi))
-        dec_[a].skip(1);
-      else
+      if (!dec_[a].quiet_but_sample(qi))
         dec_[a].step(qi);
+      else if (tick)
+        dec_[a].skip_sampled();
+      else
+        dec_[a].skip(1);
     }
   }
 

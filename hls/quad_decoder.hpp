@@ -200,18 +200,29 @@ class QuadDecoder {
   // Fast-forward, for long simulations: with these inputs held, no strobe
   // and the pins already through the synchronizers and filters, a clock
   // only ages the last edge; skip(n) is then n such clocks at once.
-  bool quiet(const QuadIn& in) const {
-    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
-    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
-    return !in.rst && !in.latch && !(POS_LOAD && in.pos_load) && !in.idx_arm && !in.idx_disarm &&
-           !in.err_clr && !in.sample && pins == r_.meta && pins == r_.sync && pins == r_.filt &&
-           r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step &&
-           !r_.qerr && !r_.z_rise && (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
-  }
+  bool quiet(const QuadIn& in) const { return !in.sample && quiet_but_sample(in); }
   void skip(uint32_t n) {
     r_.fwd = fwd_now(r_, false);  // what every quiet clock registers
     const uint64_t age = uint64_t(r_.age) + n;
     r_.age = age > ones(AGE_W) ? ones(AGE_W) : uint32_t(age);
+  }
+  // quiet() but for the sample strobe: such a clock that samples (the
+  // PID's tick, every sample) publishes the velocity and the age as well,
+  // and skip_sampled() is that clock, for much less than step().
+  bool quiet_but_sample(const QuadIn& in) const {
+    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
+    return !in.rst && !in.latch && !(POS_LOAD && in.pos_load) && !in.idx_arm && !in.idx_disarm &&
+           !in.err_clr && pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 &&
+           r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
+           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+  }
+  void skip_sampled() {
+    r_.fwd = fwd_now(r_, false);
+    r_.vel_o = r_.vel_acc;
+    r_.vel_acc = 0;  // no count in a quiet clock
+    r_.age_o = r_.age;
+    r_.age = r_.age + (r_.age != ones(AGE_W) ? 1 : 0);
   }
 
   // Fast-forward through an edge: with these inputs held and no strobe, the

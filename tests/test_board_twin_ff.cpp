@@ -13,6 +13,7 @@
 
 #include "hls/interp_core.hpp"
 #include "hls/motion_core.hpp"
+#include "hls/quad_decoder.hpp"
 #include "interp_bench.hpp"
 
 namespace mc::test {
@@ -284,6 +285,61 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       EXPECT_GT(settling, 1000u) << "seed " << seed;
     }
   }
+}
+
+// The decoder's fast-forwards against step(): a random walk of the pins
+// (edges, glitches, index pulses, dwells of every length), the sample
+// strobe and the other strobes now and then. At every clock a quiet
+// decoder's skip(1), one quiet but for the sample's skip_sampled(), and a
+// settling one's skip_settling() must leave the whole state that step()
+// leaves (the age and velocity that only the decoder's own ports show
+// included).
+TEST(QuadTwinFastForward, QuietClocksEqualSteps) {
+  using Decoder = QuadDecoder<8, 8, 32, 16, false, false>;
+  std::mt19937_64 rng(7);
+  Decoder dec;
+  QuadIn in;
+  in.filt_len = 1;
+  int64_t count = 0;
+  uint64_t quiet = 0, sampled = 0, settled = 0;
+  for (uint64_t t = 0; t < 400000; ++t) {
+    in.sample = rng() % 16 == 0;
+    in.idx_arm = rng() % 500 == 0;
+    in.err_clr = rng() % 700 == 0;
+    in.latch = rng() % 900 == 0;
+    if (rng() % 5000 == 0) in.filt_len = uint32_t(rng() % 4);
+    // Pins: an edge in one clock in twelve, a glitch now and then.
+    if (rng() % 12 == 0) count += rng() % 2 ? 1 : -1;
+    const int phase = int(((count % 4) + 4) % 4);
+    in.a = phase == 1 || phase == 2;
+    in.b = phase >= 2;
+    in.z = ((count % 40) + 40) % 40 == 0;
+    if (rng() % 97 == 0) in.a = !in.a;
+    Decoder stepped = dec;
+    stepped.step(in);
+    if (dec.quiet(in)) {
+      Decoder fast = dec;
+      fast.skip(1);
+      ASSERT_TRUE(fast == stepped) << "skip(1), clock " << t;
+      ++quiet;
+    } else if (in.sample && dec.quiet_but_sample(in)) {
+      Decoder fast = dec;
+      fast.skip_sampled();
+      ASSERT_TRUE(fast == stepped) << "skip_sampled(), clock " << t;
+      ++sampled;
+    } else if (dec.settle_clocks(in) != Decoder::kUnsettled) {
+      Decoder fast = dec;
+      fast.skip_settling(in, 1);
+      ASSERT_TRUE(fast == stepped) << "skip_settling(), clock " << t;
+      ++settled;
+    }
+    dec = stepped;
+  }
+  std::printf("%llu quiet clocks, %llu sampled quiet clocks, %llu settling clocks checked\n",
+              (unsigned long long)quiet, (unsigned long long)sampled, (unsigned long long)settled);
+  EXPECT_GT(quiet, 10000u);
+  EXPECT_GT(sampled, 1000u);
+  EXPECT_GT(settled, 1000u);
 }
 
 }  // namespace
