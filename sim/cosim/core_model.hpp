@@ -51,9 +51,10 @@ class CoreModel {
   // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
   // Up to n of those clocks at once: returns how many it did (it stops
-  // before a segment ends) and the outputs and PWM counter of the first;
-  // appends each change of the position command to *changes.
-  virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped& /*first*/,
+  // before a segment ends) and, unless first is null, the outputs and PWM
+  // counter of the first; appends each change of the position command to
+  // *changes.
+  virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped* /*first*/,
                         std::vector<CmdChange>& /*changes*/) {
     return 0;
   }
@@ -98,10 +99,12 @@ class TwinCore final : public CoreModel {
     return let_.drive && twin_.quiet_as(in, 1, let) && !segment_ends();
   }
   bool segment_ends() const override { return twin_.interp().ending(); }
-  uint32_t skip(const CoreIn& in, uint32_t n, Skipped& first, std::vector<CmdChange>& changes) override {
-    first.first = used_outputs();
-    first.pwm0 = twin_.pwm_count();
-    for (int a = 0; a < kCoreAxes; ++a) first.drive[a] = twin_.drive_steps(in, a);
+  uint32_t skip(const CoreIn& in, uint32_t n, Skipped* first, std::vector<CmdChange>& changes) override {
+    if (first) {
+      first->first = used_outputs();
+      first->pwm0 = twin_.pwm_count();
+      for (int a = 0; a < kCoreAxes; ++a) first->drive[a] = twin_.drive_steps(in, a);
+    }
     return twin_.skip_busy_as(in, n, let_, [&](uint32_t clock) {
       CmdChange c;
       c.clock = clock;

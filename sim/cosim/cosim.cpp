@@ -595,9 +595,8 @@ class Machine {
     while (done < n) {
       if (const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)));
           q > 0) {
-        Skipped sk;
         const size_t from = moves_.size();
-        const uint32_t m = core_->skip(in_, q, sk, moves_);
+        const uint32_t m = core_->skip(in_, q, nullptr, moves_);
         for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
         done += m;
         res_.clocks_skipped += m;
@@ -778,7 +777,7 @@ class Machine {
           // The command at the step's end is what the skip's last clock
           // showed: its changes before do not matter here.
           moves_.clear();
-          if (const uint32_t m = core_->skip(in_, n, sk, moves_); m > 0) {
+          if (const uint32_t m = core_->skip(in_, n, &sk, moves_); m > 0) {
             for (int a = 0; a < kCoreAxes; ++a) {
               add_skip_volts(volts[a], a, sk, 0, m);
               cmd_now_[a] = core_->cmd(a);
