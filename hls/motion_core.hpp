@@ -257,14 +257,21 @@ class MotionCore {
     // stretch, drive_change() where they change. Done and the tick stay
     // out (quiet_limit_as).
     bool drive = false;
-    // With n = 1: the clock may be the PID's (the one before the tick or
-    // done, the tick, done) or the sample port's (after done), which the
-    // caller clock()s: quiet but for them (a stretch that goes through a
-    // sample, drive_steps() telling the drive up to the next sweep's).
+    // The PID's samples: a stretch may end with the edge that raises the
+    // tick or done (quiet_limit_as() one clock longer), and the sample
+    // port follows its address (as read_port() would leave it). The tick
+    // and done themselves are the caller's to clock() (quiet_but_pid()),
+    // so that a stretch may go through a sample, drive_steps() telling the
+    // drive up to the next sweep's first update.
     bool sample = false;
   };
   bool quiet_as(const In& in, uint32_t n, Let let) const {
     return quiet_but_interp(in, n, let) && interp_quiet(in, n, let.busy);
+  }
+  // This clock is quiet_as(in, 1, let) but for being the PID's tick or done
+  // (or the sample port's): clock() it.
+  bool quiet_but_pid(const In& in, Let let) const {
+    return quiet_but_interp(in, 1, let, true) && interp_quiet(in, 1, let.busy);
   }
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a
@@ -319,7 +326,7 @@ class MotionCore {
   // The same, for quiet_as(.., let): drive updates bound it unless
   // let.drive, the next iteration unless let.busy.
   uint32_t quiet_limit_as(Let let) const {
-    uint32_t l = pid_.quiet_limit();
+    uint32_t l = pid_.quiet_limit() + (let.sample ? 1 : 0);
     const int s = pid_.sweep_clock();
     if (s != 0 && !let.drive)
       for (int a = 0; a < NAXES; ++a)
@@ -431,7 +438,7 @@ class MotionCore {
              !ii.set && !ii.jog;
     return ip_.run_quiet(ii) >= n;
   }
-  bool quiet_but_interp(const In& in, uint32_t n, Let let) const {
+  bool quiet_but_interp(const In& in, uint32_t n, Let let, bool pid_own = false) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
     if (pid_.sweep_clock() != 0 &&
         !let.drive) {  // inside a sweep: no axis takes its new drive value in the n clocks
@@ -441,7 +448,7 @@ class MotionCore {
     }
     if (!let.port && !let.sample && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
-    if (!(let.sample ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n))) return false;
+    if (!(pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample))) return false;
     for (int a = 0; a < NAXES; ++a) {
       const QuadIn qi = quad_in(in, a, false);
       if (!(let.settle ? dec_[a].settle_clocks(qi) != Decoder::kUnsettled : dec_[a].quiet(qi)) ||
@@ -462,6 +469,8 @@ class MotionCore {
   // in: the inputs held (needed with let.settle or let.drive).
   void skip_others(uint32_t n, const In* in, Let let) {
     if (let.drive) skip_drive(n, *in);
+    // The port reads the published bank, which no skipped clock swaps.
+    if (let.sample) r_.smp_rdata = read_bank(in->smp_raddr);
     pid_.skip(n);
     for (int a = 0; a < NAXES; ++a) {
       if (let.settle)

@@ -256,14 +256,28 @@ class PidCoreClocked {
   // Fast-forward: with no port activity, no tick due in the next n clocks
   // and, inside a sweep, its last clock (done) not among them, a clock only
   // counts the timers down (the sample's arithmetic was done at the tick).
-  bool quiet(const In& in, uint32_t n) const {
-    return !in.rst && !in.we && !in.re && !clr_ && !tick_ && !done_ && !rvalid_ && n < quiet_limit() + 1;
+  // edge: the last of the n clocks may be the one whose edge raises the
+  // tick or done, which skip() then raises as clock() would.
+  bool quiet(const In& in, uint32_t n, bool edge = false) const {
+    return !in.rst && !in.we && !in.re && !clr_ && !tick_ && !done_ && !rvalid_ &&
+           n < quiet_limit() + 1 + (edge ? 1 : 0);
   }
   // No port activity and not clearing: what quiet() asks but the timers.
   bool quiet_but_timers(const In& in) const { return !in.rst && !in.we && !in.re && !clr_; }
   void skip(uint32_t n) {
-    tcnt_ -= n;
-    if (run_) left_ -= int(n);
+    if (run_ && uint32_t(left_) == n) {
+      run_ = false;
+      left_ = 0;
+      done_ = true;
+    } else if (run_) {
+      left_ -= int(n);
+    }
+    if (tcnt_ == n) {
+      tick_ = true;
+      tcnt_ = core_.ts_cycles();
+    } else {
+      tcnt_ -= n;
+    }
   }
   // The most clocks the timers allow quiet() (0 if the next is the tick or
   // done).

@@ -161,14 +161,19 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
 // The motion core with a running interpolator: quiet()/skip() against
 // clock(), the PID closing the loop on a still encoder; (seeds 23 to 26)
 // quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile;
-// and (seeds 25, 26) encoders that move, so that skips start while a
+// and (seeds 25 to 28) encoders that move, so that skips start while a
 // decoder works through an edge (Let::settle): counts up and down, now and
 // then both pins at once (an error) or the index, with an index arm or an
-// error clear between.
+// error clear between. Seeds 27 and 28 let everything the co-simulation's
+// jumps let (Let::drive and Let::sample: through the sweep's drive
+// updates, up to the edge that raises the tick or done, the sample port
+// following an address that changes now and then).
 TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
   using Core = MotionCore<2>;
-  for (uint64_t seed : {21, 22, 23, 24, 25, 26}) {
-    const bool busy = seed >= 23, moving = seed >= 25;
+  for (uint64_t seed : {21, 22, 23, 24, 25, 26, 27, 28}) {
+    const bool busy = seed >= 23, moving = seed >= 25, full = seed >= 27;
+    const Core::Let all{false, true, true, true, true};
+    uint64_t edges = 0;  // skips that ended raising the tick or done
     int64_t count[2] = {};
     uint64_t settling = 0;  // skips begun with a decoder not settled
     std::mt19937_64 rng(seed);
@@ -233,10 +238,13 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
           if (r == 62) in.enc_z[x] = !in.enc_z[x];
         }
       }
-      const uint32_t lim = busy ? fast.quiet_limit_busy() : fast.quiet_limit();
+      if (full && rng() % 64 == 0) in.smp_raddr = uint8_t(rng() % 32);
+      const uint32_t lim = full   ? fast.quiet_limit_as(all)
+                           : busy ? fast.quiet_limit_busy()
+                                  : fast.quiet_limit();
       const uint32_t n = lim == 0 ? 0 : (rng() % 3 ? lim : 1 + uint32_t(rng() % lim));
       uint32_t did = 0;
-      if (n > 0 && (busy ? fast.quiet_busy(in, n) : fast.quiet(in, n))) {
+      if (n > 0 && (full ? fast.quiet_as(in, n, all) : busy ? fast.quiet_busy(in, n) : fast.quiet(in, n))) {
         for (int x = 0; x < 2; ++x) {
           QuadIn qi;
           qi.filt_len = in.enc_filt[x];
@@ -248,7 +256,11 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
             break;
           }
         }
-        if (busy) {
+        if (full) {
+          did = fast.skip_busy_as(in, n, all, [](uint32_t) {});
+          ASSERT_LE(did, n);
+          edges += fast.pid().tick() || fast.pid().done();
+        } else if (busy) {
           did = fast.skip_busy(in, n);
           ASSERT_LE(did, n);
         } else {
@@ -277,12 +289,17 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       ASSERT_TRUE(ref == fast) << "seed " << seed << ", clock " << clock;
     }
     ASSERT_FALSE(ref.interp().busy()) << "seed " << seed << ": the segments never finished";
-    std::printf("seed %llu: %llu clocks, %llu of them skipped; %llu skips begun inside an edge\n",
-                (unsigned long long)seed, (unsigned long long)clock, (unsigned long long)skipped,
-                (unsigned long long)settling);
+    std::printf(
+        "seed %llu: %llu clocks, %llu of them skipped; %llu skips begun inside an edge, %llu ended raising "
+        "the tick or done\n",
+        (unsigned long long)seed, (unsigned long long)clock, (unsigned long long)skipped,
+        (unsigned long long)settling, (unsigned long long)edges);
     EXPECT_GT(skipped, clock / 2) << "seed " << seed;
     if (moving) {
       EXPECT_GT(settling, 1000u) << "seed " << seed;
+    }
+    if (full) {
+      EXPECT_GT(edges, 1000u) << "seed " << seed;
     }
   }
 }

@@ -77,11 +77,11 @@ class CoreModel {
 };
 
 // drive: skips may go through the sweep's drive updates (a user that
-// integrates the drive value over a skip from Skipped::drive); else they
-// end before each.
+// integrates the drive value over a skip from Skipped::drive) and end with
+// the edge before a PID sample's tick or done; else they end before each.
 class TwinCore final : public CoreModel {
  public:
-  explicit TwinCore(bool drive = false) : let_{false, true, true, drive} {}
+  explicit TwinCore(bool drive = false) : let_{false, true, true, drive, drive} {}
   CoreOut cycle(const CoreIn& in) override {
     const CoreOut o = used_outputs();
     twin_.clock(in);
@@ -94,9 +94,7 @@ class TwinCore final : public CoreModel {
   DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
   uint32_t known_drive_clocks() const override { return twin_.known_drive_clocks(); }
   bool sample_clock(const CoreIn& in) const override {
-    CoreTwin::Let let = let_;
-    let.sample = true;
-    return let_.drive && twin_.quiet_as(in, 1, let) && !segment_ends();
+    return let_.sample && twin_.quiet_but_pid(in, let_) && !segment_ends();
   }
   bool segment_ends() const override { return twin_.interp().ending(); }
   uint32_t skip(const CoreIn& in, uint32_t n, Skipped* first, std::vector<CmdChange>& changes) override {
