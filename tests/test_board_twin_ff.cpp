@@ -304,6 +304,140 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
   }
 }
 
+// What the co-simulation's jumps rest on, against clock(): from random
+// points of a running core (lines, arcs and dwells streamed in, encoders
+// moving with glitches and index pulses, the drive allowed, overridden or
+// written now and then, the sample port's address changing), the inputs
+// held as a jump holds them: (1) drive_steps() gives each axis's drive
+// value in every clock up to known_drive_clocks(); (2) skipping what
+// quiet_as(.., Let with drive and sample) allows and clocking what
+// quiet_but_pid() allows leaves the whole state that clocking leaves, no
+// segment ends or loads meanwhile, and done comes at the same clocks. Ts
+// = 52 clocks is the latency itself: the tick and done at one edge.
+TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
+  using Core = MotionCore<2>;
+  const Core::Let all{false, true, true, true, true};
+  for (const uint32_t ts : {52u, 53u, 200u, 1207u}) {
+    std::mt19937_64 rng(ts);
+    SegGen gen(ts);
+    gen.min_rate = 0.001;
+    gen.max_rate = 0.03;
+    gen.max_line = 30;
+    gen.max_radius = 20;
+    gen.planes = false;
+    Core ref;
+    Core::In in;
+    in.rst = true;
+    for (int i = 0; i < 3; ++i) ref.clock(in);
+    in.rst = false;
+    const std::pair<uint8_t, uint32_t> cfg[] = {
+        {0x00, (1u << 20) | (16u << 24)}, {0x10, (1u << 20) | (16u << 24)}, {0x0F, 1}, {0x1F, 1}, {0xF0, ts}};
+    for (const auto& [addr, data] : cfg) {
+      in.pid_we = true;
+      in.pid_waddr = addr;
+      in.pid_wdata = data;
+      while (!ref.outputs(true).pid_wready) ref.clock(in);
+      ref.clock(in);
+    }
+    in.pid_we = false;
+    in.drv_allow[0] = in.drv_allow[1] = true;
+    in.enc_filt[0] = ts % 4;
+    in.enc_filt[1] = 3;
+    Vec3 at{0, 0, 0};
+    std::vector<uint32_t> words;
+    int64_t count[2] = {};
+    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0;
+    for (uint64_t clock = 0; clock < 150'000; ++clock) {
+      if (words.size() < 40) {
+        const PlannedSegment p = gen.any(at);
+        at = p.end;
+        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+      }
+      in.seg_wr = rng() % 8 == 0 && ref.interp().count() < 100;
+      in.seg_wdata = in.seg_wr ? words.front() : 0;
+      if (in.seg_wr) words.erase(words.begin());
+      if (rng() % 20'000 == 0)
+        for (int x = 0; x < 2; ++x) {
+          in.drv_allow[x] = rng() % 4 != 0;
+          in.drv_ovr[x] = rng() % 4 == 0;
+        }
+      for (int x = 0; x < 2; ++x) in.drv_ovr_we[x] = rng() % 50'000 == 0;
+      in.drv_ovr_val = int16_t(rng());
+      if (rng() % 500 == 0) in.smp_raddr = uint8_t(rng() % 32);
+      for (int x = 0; x < 2; ++x) {
+        in.enc_idx_arm[x] = rng() % 5000 == 0;
+        in.enc_err_clr[x] = rng() % 5000 == 0;
+        const uint64_t r = rng() % 3000;
+        if (r < 20) count[x] += r < 10 ? 1 : -1;
+        const int q = int(count[x] & 3);
+        in.enc_a[x] = q == 1 || q == 2;
+        in.enc_b[x] = q >= 2;
+        if (r == 61) in.enc_a[x] = !in.enc_a[x];  // both pins at once: an error
+        if (r == 61) in.enc_b[x] = !in.enc_b[x];
+        if (r == 62) in.enc_z[x] = !in.enc_z[x];
+      }
+      if (rng() % 97 == 0) {
+        // The inputs a jump holds: no segment word, strobe or override write.
+        Core::In h = in;
+        h.seg_wr = false;
+        h.seg_wdata = 0;
+        for (int x = 0; x < 2; ++x) h.enc_idx_arm[x] = h.enc_err_clr[x] = h.drv_ovr_we[x] = false;
+        const Core::DriveSteps ds[2] = {ref.drive_steps(h, 0), ref.drive_steps(h, 1)};
+        const uint32_t known = std::min<uint32_t>(ref.known_drive_clocks(), 3000);
+        Core clocked = ref;
+        for (uint32_t c = 0; c < known; ++c) {
+          for (int x = 0; x < 2; ++x)
+            ASSERT_EQ(clocked.drv_u(x), ds[x].at(c))
+                << "Ts " << ts << ", clock " << clock << "+" << c << ", axis " << x;
+          clocked.clock(h);
+        }
+        for (int x = 0; x < 2; ++x) changes += ds[x].change < known;
+        // The jump's advance over a random part of that, against clocking.
+        const uint32_t n = 1 + uint32_t(rng() % known);
+        Core fast = ref;
+        std::vector<uint32_t> fast_done;
+        uint32_t did = 0;
+        while (did < n) {
+          const uint32_t q = std::min(n - did, fast.quiet_limit_as(all));
+          if (q > 0 && fast.quiet_as(h, q, all)) {
+            const uint32_t m = fast.skip_busy_as(h, q, all, [](uint32_t) {});
+            did += m;
+            if (m > 0) continue;
+          }
+          const bool quiet_one = fast.quiet_limit_as(all) > 0 && fast.quiet_as(h, 1, all);
+          if (fast.interp().ending() || (!quiet_one && !fast.quiet_but_pid(h, all))) break;
+          if (fast.pid().done()) fast_done.push_back(did);
+          fast.clock(h);
+          ++did;
+          ++cycled;
+        }
+        Core slow = ref;
+        std::vector<uint32_t> slow_done;
+        const int level = slow.interp().count(), segments = slow.interp().seg_cnt();
+        for (uint32_t i = 0; i < did; ++i) {
+          if (slow.pid().done()) slow_done.push_back(i);
+          slow.clock(h);
+        }
+        ASSERT_EQ(slow.interp().count(), level) << "Ts " << ts << ", clock " << clock;
+        ASSERT_EQ(slow.interp().seg_cnt(), segments) << "Ts " << ts << ", clock " << clock;
+        ASSERT_TRUE(slow == fast) << "Ts " << ts << ", clock " << clock << ", " << did << " of " << n;
+        ASSERT_EQ(slow_done, fast_done) << "Ts " << ts << ", clock " << clock;
+        samples += fast_done.size();
+        held += did;
+        ++jumps;
+      }
+      ref.clock(in);
+    }
+    std::printf(
+        "Ts %u: %llu jumps over %llu clocks, %llu drive updates inside, %llu clocks cycled, %llu samples\n",
+        ts, (unsigned long long)jumps, (unsigned long long)held, (unsigned long long)changes,
+        (unsigned long long)cycled, (unsigned long long)samples);
+    EXPECT_GT(jumps, 1000u);
+    EXPECT_GT(changes, 30u);
+    EXPECT_GT(samples, 30u);
+  }
+}
+
 // The decoder's fast-forwards against step(): a random walk of the pins
 // (edges, glitches, index pulses, dwells of every length), the sample
 // strobe and the other strobes now and then. At every clock a quiet
