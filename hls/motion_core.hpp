@@ -379,7 +379,13 @@ class MotionCore {
   struct DriveSteps {
     int16_t first, then, after;
     uint32_t change;
-    int16_t at(uint32_t clock) const { return clock == 0 ? first : clock <= change ? then : after; }
+    int16_t at(uint64_t clock) const { return clock == 0 ? first : clock <= change ? then : after; }
+    // The first clock after c from which at() may differ (kNever: none).
+    static constexpr uint64_t kNever = ~uint64_t(0);
+    uint64_t next_change(uint64_t c) const {
+      if (c == 0) return 1;
+      return change != kNoChange && c <= change ? uint64_t(change) + 1 : kNever;
+    }
   };
   DriveSteps drive_steps(const In& in, int a) const {
     return {r_.drv_u[a], u_sel(r_, in, a), updated(in, a), drive_change(in, a)};

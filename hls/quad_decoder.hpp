@@ -218,11 +218,10 @@ class QuadDecoder {
            (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   void skip_sampled() {
-    r_.fwd = fwd_now(r_, false);
     r_.vel_o = r_.vel_acc;
     r_.vel_acc = 0;  // no count in a quiet clock
     r_.age_o = r_.age;
-    r_.age = r_.age + (r_.age != ones(AGE_W) ? 1 : 0);
+    skip(1);
   }
 
   // Fast-forward through an edge: with these inputs held and no strobe, the

@@ -617,11 +617,7 @@ class Machine {
         moved = moved || c.cmd[a] != o.cmd[a];
       }
       if (moved) moves_.push_back(c);
-      if (o.done && (at + done) / k_ >= start_step_) {
-        const CoreOut after = core_->peek(in_);
-        res_.sample_clock.push_back(at + done - 1);
-        for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(after.drv_cmd[a]);
-      }
+      if (o.done && (at + done) / k_ >= start_step_) record_sample(at + done - 1, core_->peek(in_));
     }
     return done;
   }
@@ -635,17 +631,12 @@ class Machine {
                        std::vector<double>* out) {
     const DriveSteps& ds = sk.drive[a];
     const int64_t count = p.encoder_count();
-    // The clocks at which the drive value changes: 1, change + 1, or neither.
-    constexpr uint64_t kNever = ~uint64_t(0);
-    const uint64_t changes[2] = {
-        ds.first != ds.then ? 1 : kNever,
-        ds.change != CoreTwin::kNoChange && ds.after != ds.then ? ds.change + 1ull : kNever};
     uint64_t s = 0;
     while (s < n) {
       const uint64_t c0 = s * k_;
-      uint64_t next = kNever;
-      for (const uint64_t c : changes)
-        if (c > c0) next = std::min(next, c);
+      // The next clock with another drive value.
+      uint64_t next = ds.next_change(c0);
+      while (next != DriveSteps::kNever && ds.at(next) == ds.at(c0)) next = ds.next_change(next);
       uint64_t len;
       double v;
       if (next < c0 + k_) {
@@ -655,7 +646,7 @@ class Machine {
         v = sv.mean(k_);
         len = 1;
       } else {
-        v = averaged_volts(a, ds.at(uint32_t(std::min<uint64_t>(c0, ~0u))));
+        v = averaged_volts(a, ds.at(c0));
         len = std::min(n, next / k_) - s;
       }
       // The records in this piece, counted from its start.
@@ -692,6 +683,13 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a)
       if (emit_n_[a] != 0) c = std::max<uint32_t>(c, uint32_t(2 * (std::llabs(emit_n_[a]) - 1)));
     return c;
+  }
+
+  // A controller sample: the clock of its done, and the output the drive
+  // commands hold from the clock after (o: that clock's outputs).
+  void record_sample(uint64_t done_clock, const CoreOut& o) {
+    res_.sample_clock.push_back(done_clock);
+    for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.drv_cmd[a]);
   }
 
   // The pins of clock c of this step (emit_plan).
@@ -799,10 +797,7 @@ class Machine {
       }
       if (pending_) {
         pending_ = false;
-        if (step_ >= start_step_) {
-          res_.sample_clock.push_back(done_clock_);
-          for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.drv_cmd[a]);
-        }
+        if (step_ >= start_step_) record_sample(done_clock_, o);
       }
       if (o.done) {
         pending_ = true;
@@ -838,12 +833,9 @@ class Machine {
     const DriveConfig& d = s_.machine.axes[size_t(a)].drive;
     if (!switching(d)) {
       const DriveSteps& ds = sk.drive[a];
-      // Its pieces: clock 0, clocks 1 .. change, and the rest.
-      const uint64_t end = from + n, bounds[3] = {1, uint64_t(ds.change) + 1, end};
-      for (uint64_t c = from, i = 0; c < end; ++i) {
-        const uint64_t to = std::min(bounds[i], end);
-        if (to <= c) continue;
-        volts.add(averaged_volts(a, ds.at(uint32_t(std::min<uint64_t>(c, ~0u)))), uint32_t(to - c));
+      for (uint64_t c = from, end = from + n; c < end;) {
+        const uint64_t to = std::min(ds.next_change(c), end);
+        volts.add(averaged_volts(a, ds.at(c)), uint32_t(to - c));
         c = to;
       }
       return;
