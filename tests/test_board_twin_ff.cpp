@@ -158,6 +158,62 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
   EXPECT_GT(clocks_bounded, clocks_run / 2);
 }
 
+using Core = MotionCore<2>;
+
+// Segments for a core that closes its loops while they run: slow, short,
+// XY only.
+SegGen core_segments(uint64_t seed) {
+  SegGen gen(seed);
+  gen.min_rate = 0.001;
+  gen.max_rate = 0.03;
+  gen.max_line = 30;
+  gen.max_radius = 20;
+  gen.planes = false;
+  return gen;
+}
+
+// Reset, gains, Ts and both axes enabled through the PID port, every core
+// clocked alike; the drive allowed.
+template <typename... More>
+void configure(Core::In& in, uint32_t ts, Core& core, More&... more) {
+  const auto clock = [&] {
+    core.clock(in);
+    (more.clock(in), ...);
+  };
+  in.rst = true;
+  for (int i = 0; i < 3; ++i) clock();
+  in.rst = false;
+  const std::pair<uint8_t, uint32_t> cfg[] = {
+      {0x00, (1u << 20) | (16u << 24)}, {0x10, (1u << 20) | (16u << 24)}, {0x0F, 1}, {0x1F, 1}, {0xF0, ts}};
+  for (const auto& [addr, data] : cfg) {
+    in.pid_we = true;
+    in.pid_waddr = addr;
+    in.pid_wdata = data;
+    while (!core.outputs(true).pid_wready) clock();
+    clock();
+  }
+  in.pid_we = false;
+  in.drv_allow[0] = in.drv_allow[1] = true;
+}
+
+// Both encoders' pins for this clock: a count up or down in `edges` clocks
+// of 3000 each, now and then both pins at once (an error) or the index; an
+// index arm or error clear in one clock of `strobe` each.
+void walk_encoders(std::mt19937_64& rng, Core::In& in, int64_t (&count)[2], uint64_t edges, uint64_t strobe) {
+  for (int x = 0; x < 2; ++x) {
+    in.enc_idx_arm[x] = rng() % strobe == 0;
+    in.enc_err_clr[x] = rng() % strobe == 0;
+    const uint64_t r = rng() % 3000;
+    if (r < edges) count[x] += r < edges / 2 ? 1 : -1;
+    const int q = int(count[x] & 3);
+    in.enc_a[x] = q == 1 || q == 2;
+    in.enc_b[x] = q >= 2;
+    if (r == 61) in.enc_a[x] = !in.enc_a[x];  // both pins at once: an error
+    if (r == 61) in.enc_b[x] = !in.enc_b[x];
+    if (r == 62) in.enc_z[x] = !in.enc_z[x];
+  }
+}
+
 // The motion core with a running interpolator: quiet()/skip() against
 // clock(), the PID closing the loop on a still encoder; (seeds 23 to 26)
 // quiet_busy()/skip_busy(), which let the interpolator iterate meanwhile;
@@ -169,7 +225,6 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
 // updates, up to the edge that raises the tick or done, the sample port
 // following an address that changes now and then).
 TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
-  using Core = MotionCore<2>;
   for (uint64_t seed : {21, 22, 23, 24, 25, 26, 27, 28}) {
     const bool busy = seed >= 23, moving = seed >= 25, full = seed >= 27;
     const Core::Let all{false, true, true, true, true};
@@ -177,39 +232,10 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
     int64_t count[2] = {};
     uint64_t settling = 0;  // skips begun with a decoder not settled
     std::mt19937_64 rng(seed);
-    SegGen gen(seed);
-    gen.min_rate = 0.001;
-    gen.max_rate = 0.03;
-    gen.max_line = 30;
-    gen.max_radius = 20;
-    gen.planes = false;
+    SegGen gen = core_segments(seed);
     Core ref, fast;
     Core::In in;
-    in.rst = true;
-    for (int i = 0; i < 3; ++i) {
-      ref.clock(in);
-      fast.clock(in);
-    }
-    in.rst = false;
-    // Gains, Ts = 200 clocks, both axes enabled.
-    const std::pair<uint8_t, uint32_t> cfg[] = {{0x00, (1u << 20) | (16u << 24)},
-                                                {0x10, (1u << 20) | (16u << 24)},
-                                                {0x0F, 1},
-                                                {0x1F, 1},
-                                                {0xF0, 200}};
-    for (const auto& [addr, data] : cfg) {
-      in.pid_we = true;
-      in.pid_waddr = addr;
-      in.pid_wdata = data;
-      while (!ref.outputs(true).pid_wready) {
-        ref.clock(in);
-        fast.clock(in);
-      }
-      ref.clock(in);
-      fast.clock(in);
-    }
-    in.pid_we = false;
-    in.drv_allow[0] = in.drv_allow[1] = true;
+    configure(in, 200, ref, fast);
     in.enc_filt[0] = uint32_t(seed % 4);
     in.enc_filt[1] = 5;
     Vec3 at{0, 0, 0};
@@ -224,20 +250,7 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
       in.seg_wr = !words.empty() && rng() % 4 == 0 && ref.interp().count() < 300;
       in.seg_wdata = in.seg_wr ? words.front() : 0;
       if (in.seg_wr) words.erase(words.begin());
-      if (moving) {
-        for (int x = 0; x < 2; ++x) {
-          in.enc_idx_arm[x] = rng() % 800 == 0;
-          in.enc_err_clr[x] = rng() % 800 == 0;
-          const uint64_t r = rng() % 3000;
-          if (r < 60) count[x] += r < 30 ? 1 : -1;
-          const int q = int(count[x] & 3);
-          in.enc_a[x] = q == 1 || q == 2;
-          in.enc_b[x] = q >= 2;
-          if (r == 61) in.enc_a[x] = !in.enc_a[x];  // both pins at once: an error
-          if (r == 61) in.enc_b[x] = !in.enc_b[x];
-          if (r == 62) in.enc_z[x] = !in.enc_z[x];
-        }
-      }
+      if (moving) walk_encoders(rng, in, count, 60, 800);
       if (full && rng() % 64 == 0) in.smp_raddr = uint8_t(rng() % 32);
       const uint32_t lim = full   ? fast.quiet_limit_as(all)
                            : busy ? fast.quiet_limit_busy()
@@ -315,32 +328,13 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
 // segment ends or loads meanwhile, and done comes at the same clocks. Ts
 // = 52 clocks is the latency itself: the tick and done at one edge.
 TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
-  using Core = MotionCore<2>;
   const Core::Let all{false, true, true, true, true};
   for (const uint32_t ts : {52u, 53u, 200u, 1207u}) {
     std::mt19937_64 rng(ts);
-    SegGen gen(ts);
-    gen.min_rate = 0.001;
-    gen.max_rate = 0.03;
-    gen.max_line = 30;
-    gen.max_radius = 20;
-    gen.planes = false;
+    SegGen gen = core_segments(ts);
     Core ref;
     Core::In in;
-    in.rst = true;
-    for (int i = 0; i < 3; ++i) ref.clock(in);
-    in.rst = false;
-    const std::pair<uint8_t, uint32_t> cfg[] = {
-        {0x00, (1u << 20) | (16u << 24)}, {0x10, (1u << 20) | (16u << 24)}, {0x0F, 1}, {0x1F, 1}, {0xF0, ts}};
-    for (const auto& [addr, data] : cfg) {
-      in.pid_we = true;
-      in.pid_waddr = addr;
-      in.pid_wdata = data;
-      while (!ref.outputs(true).pid_wready) ref.clock(in);
-      ref.clock(in);
-    }
-    in.pid_we = false;
-    in.drv_allow[0] = in.drv_allow[1] = true;
+    configure(in, ts, ref);
     in.enc_filt[0] = ts % 4;
     in.enc_filt[1] = 3;
     Vec3 at{0, 0, 0};
@@ -364,18 +358,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
       for (int x = 0; x < 2; ++x) in.drv_ovr_we[x] = rng() % 50'000 == 0;
       in.drv_ovr_val = int16_t(rng());
       if (rng() % 500 == 0) in.smp_raddr = uint8_t(rng() % 32);
-      for (int x = 0; x < 2; ++x) {
-        in.enc_idx_arm[x] = rng() % 5000 == 0;
-        in.enc_err_clr[x] = rng() % 5000 == 0;
-        const uint64_t r = rng() % 3000;
-        if (r < 20) count[x] += r < 10 ? 1 : -1;
-        const int q = int(count[x] & 3);
-        in.enc_a[x] = q == 1 || q == 2;
-        in.enc_b[x] = q >= 2;
-        if (r == 61) in.enc_a[x] = !in.enc_a[x];  // both pins at once: an error
-        if (r == 61) in.enc_b[x] = !in.enc_b[x];
-        if (r == 62) in.enc_z[x] = !in.enc_z[x];
-      }
+      walk_encoders(rng, in, count, 20, 5000);
       if (rng() % 97 == 0) {
         // The inputs a jump holds: no segment word, strobe or override write.
         Core::In h = in;
