@@ -593,8 +593,8 @@ class Machine {
     const uint64_t at = step_ * k_;
     uint64_t done = 0;
     while (done < n) {
-      if (const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)));
-          q > 0) {
+      const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)));
+      if (q > 0) {
         const size_t from = moves_.size();
         const uint32_t m = core_->skip(in_, q, nullptr, moves_);
         for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
@@ -602,9 +602,11 @@ class Machine {
         res_.clocks_skipped += m;
         if (m > 0) continue;
       }
-      // A skip stops before a clock that moves the command last, or that
-      // ends the segment: the first is cycled here, the second not.
-      if (core_->segment_ends() || (!core_->sample_clock(in_) && core_->quiet_clocks(in_, 1) == 0)) break;
+      // A quiet clock the skip stopped before moves the command last, or
+      // ends the segment: the first is cycled here, the second not; so is a
+      // sample's clock. (What is not quiet for q clocks is not for one:
+      // quiet_clocks bounds q to what the timers allow.)
+      if (core_->segment_ends() || (q == 0 && !core_->sample_clock(in_))) break;
       const CoreOut o = core_->cycle(in_);
       ++res_.clocks_cycled;
       ++done;
