@@ -237,6 +237,13 @@ class QuadDecoder {
     if (in.rst || in.latch || (POS_LOAD && in.pos_load) || in.idx_arm || in.idx_disarm || in.err_clr ||
         in.sample)
       return kUnsettled;
+    if (clean_edge(in)) {
+      // A move or a rising index is registered at the filter's pass and
+      // gone a clock later; anything else is over with the pass.
+      const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+      const uint32_t pass = pins ^ r_.meta;
+      return (pass & 3) != 0 || (pass & pins & 4) != 0 ? kEdgeClocks : kEdgeClocks - 1;
+    }
     QuadDecoder d = *this;
     for (uint32_t c = 1; c <= kMaxSettle; ++c) {
       d.step(in);
@@ -251,6 +258,11 @@ class QuadDecoder {
   // n clocks with these inputs after settle_clocks(in) said it settles:
   // stepped until quiet, skipped from there.
   void skip_settling(const QuadIn& in, uint32_t n) {
+    if (n >= kEdgeClocks && clean_edge(in)) {
+      settle_edge(in);
+      skip(n - kEdgeClocks);
+      return;
+    }
     uint32_t i = 0;
     for (; i < n && !quiet(in); ++i) step(in);
     if (i < n) skip(n - i);
@@ -284,8 +296,46 @@ class QuadDecoder {
   // The RTL's registers, same names, in the RTL's order.
   // Direction of this clock's A or B move (A leads B: forward).
   struct Regs;
-  static bool fwd_now(const Regs& r, bool a_mv) {
-    return a_mv ? ((r.sync ^ (r.filt >> 1)) & 1) != 0 : (((r.sync >> 1) ^ r.filt) & 1) == 0;
+  static bool fwd_now(const Regs& r, bool a_mv) { return fwd_of(r.sync, r.filt, a_mv); }
+  static bool fwd_of(uint32_t sync, uint32_t filt, bool a_mv) {
+    return a_mv ? ((sync ^ (filt >> 1)) & 1) != 0 : (((sync >> 1) ^ filt) & 1) == 0;
+  }
+
+  // A clean edge: the decoder settled on the pins it last saw (as quiet()
+  // would have it, strobes aside), new pins that a filter of at most one
+  // clock passes at once, and neither a quadrature error nor an armed index
+  // on the way. The settling then always takes the same clocks: two
+  // through the synchronizers, the filter's pass, the count (a move's);
+  // settle_edge() is the first four, as step() does them
+  // (QuadTwinFastForward holds it to step()).
+  static constexpr uint32_t kEdgeClocks = 4;
+  bool clean_edge(const QuadIn& in) const {
+    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t pass = pins ^ r_.meta;
+    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
+    return (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
+           !(r_.idx_armed_o && (pass & pins & 4)) && r_.meta == r_.sync && r_.sync == r_.filt &&
+           r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step &&
+           !r_.qerr && !r_.z_rise && (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+  }
+  void settle_edge(const QuadIn& in) {
+    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const bool a_mv = (pins ^ r_.meta) & 1, b_mv = ((pins ^ r_.meta) >> 1) & 1;
+    // Clock 3 registers the move's direction from the new synchronizer and
+    // the old filter; clock 4 counts it.
+    const bool step = a_mv != b_mv, up = fwd_of(pins, r_.filt, a_mv) != in.dir_inv;
+    r_.meta = r_.sync = r_.filt = pins;
+    r_.oth = ((pins & 1) << 1) | ((pins >> 1) & 1);
+    r_.fwd = fwd_of(pins, pins, false);
+    if (step) {
+      r_.pos_o += up ? 1u : ~0u;
+      const int64_t vel_sum = int64_t(r_.vel_acc) + (up ? 1 : -1);
+      if (sat(vel_sum, VEL_W) == vel_sum) r_.vel_acc = int32_t(vel_sum);
+      r_.age = 0;
+    } else {
+      const uint64_t age = uint64_t(r_.age) + kEdgeClocks;
+      r_.age = age > ones(AGE_W) ? ones(AGE_W) : uint32_t(age);
+    }
   }
 
   struct Regs {

@@ -435,7 +435,8 @@ TEST(QuadTwinFastForward, QuietClocksEqualSteps) {
   QuadIn in;
   in.filt_len = 1;
   int64_t count = 0;
-  uint64_t quiet = 0, sampled = 0, settled = 0;
+  std::mt19937_64 pick(11);  // the held stretches' lengths, apart from the walk
+  uint64_t quiet = 0, sampled = 0, settled = 0, settled_at_once = 0, whole_edges = 0;
   for (uint64_t t = 0; t < 400000; ++t) {
     in.sample = rng() % 16 == 0;
     in.idx_arm = rng() % 500 == 0;
@@ -461,19 +462,40 @@ TEST(QuadTwinFastForward, QuietClocksEqualSteps) {
       fast.skip_sampled();
       ASSERT_TRUE(fast == stepped) << "skip_sampled(), clock " << t;
       ++sampled;
-    } else if (dec.settle_clocks(in) != Decoder::kUnsettled) {
+    } else if (const uint32_t c = dec.settle_clocks(in); c != Decoder::kUnsettled) {
       Decoder fast = dec;
       fast.skip_settling(in, 1);
       ASSERT_TRUE(fast == stepped) << "skip_settling(), clock " << t;
       ++settled;
+      // The whole settling at once, with the pins held: the clocks it
+      // said, and n of them (past it too) as n steps leave the decoder.
+      Decoder held = dec;
+      uint32_t to_quiet = 0;
+      while (!held.quiet(in) && to_quiet <= Decoder::kMaxSettle) {
+        held.step(in);
+        ++to_quiet;
+      }
+      ASSERT_EQ(c, to_quiet) << "settle_clocks(), clock " << t;
+      const uint32_t n = 1 + uint32_t(pick() % 12);
+      held = dec;
+      for (uint32_t i = 0; i < n; ++i) held.step(in);
+      fast = dec;
+      fast.skip_settling(in, n);
+      ASSERT_TRUE(fast == held) << "skip_settling(" << n << "), clock " << t;
+      ++settled_at_once;
+      if (c == 4 && n >= 4) ++whole_edges;
     }
     dec = stepped;
   }
-  std::printf("%llu quiet clocks, %llu sampled quiet clocks, %llu settling clocks checked\n",
-              (unsigned long long)quiet, (unsigned long long)sampled, (unsigned long long)settled);
+  std::printf(
+      "%llu quiet clocks, %llu sampled quiet clocks, %llu settling clocks, %llu settlings at once (%llu "
+      "whole edges) checked\n",
+      (unsigned long long)quiet, (unsigned long long)sampled, (unsigned long long)settled,
+      (unsigned long long)settled_at_once, (unsigned long long)whole_edges);
   EXPECT_GT(quiet, 10000u);
   EXPECT_GT(sampled, 1000u);
   EXPECT_GT(settled, 1000u);
+  EXPECT_GT(whole_edges, 1000u);
 }
 
 }  // namespace
