@@ -444,7 +444,7 @@ class Machine {
   // true table position, and of the encoder counts the board would report.
   void job_contour() {
     const mc::machine::Job& j = *s_.scenario.job;
-    const double cpm = counts_per_m(s_.machine.axes[0]);
+    const double cpm = cpm_;
     const size_t n = res_.t.size();
     std::vector<std::array<int32_t, 3>> cmd(n);
     std::vector<mc::host::Vec3d> pos(n), enc(n);
@@ -541,7 +541,7 @@ class Machine {
     // The plants up to the first count change of either, sampled at the
     // records.
     for (int a = 0; a < kCoreAxes; ++a) {
-      ahead_[size_t(a)] = plant_[size_t(a)];
+      ahead_[size_t(a)].take_motion(plant_[size_t(a)]);
       sampled_[a].clear();
       ahead_steps_[a] = hold_driven(ahead_[size_t(a)], a, sk, most, first, &sampled_[a]);
       most = std::min(most, ahead_steps_[a]);
@@ -553,7 +553,7 @@ class Machine {
     const uint64_t whole = m / k_;
     for (int a = 0; a < kCoreAxes && whole > 0; ++a) {
       if (ahead_steps_[a] == whole)
-        plant_[size_t(a)] = ahead_[size_t(a)];
+        plant_[size_t(a)].take_motion(ahead_[size_t(a)]);
       else if (hold_driven(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr) != whole)
         throw std::logic_error("co-simulation: a held plant changed its count early");
     }
@@ -904,10 +904,9 @@ class Machine {
   }
   // The trace's sample at the end of plant step `step`.
   void record_values(uint64_t step, const int32_t* cmd, const double* pos_m, const int64_t* count) {
-    const double cpm = counts_per_m(s_.machine.axes[0]);
     res_.t.push_back(double(step - start_step_) * dt());
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].push_back(double(cmd[a]) / cpm);
+      res_.cmd_m[size_t(a)].push_back(double(cmd[a]) / cpm_);
       res_.pos_m[size_t(a)].push_back(pos_m[a]);
       if (s_.scenario.kind == ScenarioKind::Job) enc_[size_t(a)].push_back(count[a]);
     }
@@ -915,6 +914,7 @@ class Machine {
 
   const RunSpec& s_;
   const uint32_t k_;
+  const double cpm_ = counts_per_m(s_.machine.axes[0]);  // the command's counts per metre
   Command cmd_;
   SegmentFeed feed_;
   std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record

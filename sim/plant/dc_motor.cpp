@@ -51,17 +51,22 @@ AxisPlant::AxisPlant(const AxisConfig& cfg, double dt_s) : m_(cfg.motor), dt_(dt
   stuck_b_ = -std::expm1(-m_.r_ohm / m_.l_h * dt_s) / m_.r_ohm;
 
   auto pw = std::make_shared<Powers>();
-  pw->ad.resize(kRun + 1);
-  pw->bd.resize(kRun + 1);
+  pw->k.resize(kRun + 1);
   pw->stuck_a.resize(kRun + 1);
   pw->stuck_b.resize(kRun + 1);
-  pw->ad[0].setIdentity();
-  pw->bd[0].setZero();
+  Eigen::Matrix3d ad = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 3, 2> bd = Eigen::Matrix<double, 3, 2>::Zero();
   pw->stuck_a[0] = 1;
   pw->stuck_b[0] = 0;
-  for (uint32_t k = 0; k < kRun; ++k) {
-    pw->ad[k + 1] = ad_ * pw->ad[k];
-    pw->bd[k + 1] = pw->bd[k] + pw->ad[k] * bd_;
+  for (uint32_t k = 0;; ++k) {
+    Power& p = pw->k[k];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) p.ad[i][j] = ad(i, j);
+      for (int j = 0; j < 2; ++j) p.bd[i][j] = bd(i, j);
+    }
+    if (k == kRun) break;
+    bd = bd + ad * bd_;
+    ad = ad_ * ad;
     pw->stuck_a[k + 1] = stuck_a_ * pw->stuck_a[k];
     pw->stuck_b[k + 1] = pw->stuck_b[k] + pw->stuck_a[k] * stuck_b_;
   }
@@ -81,10 +86,6 @@ void AxisPlant::anchor(double v, double dir) {
   k_ = 0;
   anchored_ = true;
   u0_ = Eigen::Vector2d(v, tau_load_ + (friction_ && !stuck_ ? dir * m_.coulomb_nm : 0.0));
-}
-
-int64_t AxisPlant::count_of(const Eigen::Vector3d& x) const {
-  return int64_t(std::floor(x(2) * rad_to_count_));
 }
 
 double AxisPlant::driving_torque_nm() const {
@@ -131,8 +132,7 @@ uint64_t AxisPlant::hold(double v, uint64_t n, const Samples& samples) {
         // Samples inside the quiet stretch, from the run (a stuck shaft
         // stands where it is).
         for (; next <= taken + quiet; next += samples.every)
-          samples.out->push_back(stuck ? position_m()
-                                       : run_state(uint32_t(k_ + (next - taken)))(2) * rad_to_m_);
+          samples.out->push_back(stuck ? position_m() : run_x(uint32_t(k_ + (next - taken)), 2) * rad_to_m_);
         k_ += quiet;
         steps_ += quiet;
         taken += quiet;
@@ -178,14 +178,13 @@ uint32_t last_of_sign(uint32_t lo, uint32_t hi, F f) {
 
 uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   const auto event = [&](uint32_t j) {
-    const Eigen::Vector3d x = run_state(j);
-    return (friction_ && x(1) * dir_ <= 0) || count_of(x) != count;
+    return (friction_ && run_x(j, 1) * dir_ <= 0) ||
+           int64_t(std::floor(run_x(j, 2) * rad_to_count_)) != count;
   };
   const auto accel = [&](uint32_t j) {
-    const Eigen::Vector3d x = run_state(j);
-    return m_.kt_nm_per_a * x(0) - m_.b_nm_s_per_rad * x(1) - u0_(1);
+    return m_.kt_nm_per_a * run_x(j, 0) - m_.b_nm_s_per_rad * run_x(j, 1) - u0_(1);
   };
-  const auto speed = [&](uint32_t j) { return run_state(j)(1); };
+  const auto speed = [&](uint32_t j) { return run_x(j, 1); };
   // Pieces of the run on which the speed is monotone (split where the
   // acceleration changes sign) and, without friction, of one sign (split
   // where it crosses zero): on each the angle is monotone too, so once an
@@ -209,9 +208,9 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
       // is most often the event's or next to it: probed with its neighbour
       // first, it narrows what the bisection has left. Both keep the first
       // step with the event (the piece is monotone).
-      const Eigen::Vector3d x = run_state(from);
-      const double per_step = x(1) * dt_, edge = double(per_step > 0 ? count + 1 : count) / rad_to_count_;
-      const double ahead = per_step != 0 ? (edge - x(2)) / per_step : -1;
+      const double per_step = run_x(from, 1) * dt_,
+                   edge = double(per_step > 0 ? count + 1 : count) / rad_to_count_;
+      const double ahead = per_step != 0 ? (edge - run_x(from, 2)) / per_step : -1;
       if (ahead > 0 && ahead < double(to - from - 1)) {
         const uint32_t g = from + std::max<uint32_t>(1, uint32_t(std::ceil(ahead)));
         if (event(g)) {

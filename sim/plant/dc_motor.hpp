@@ -55,6 +55,20 @@ class AxisPlant {
     std::vector<double>* out = nullptr;
   };
   uint64_t hold(double terminal_volts, uint64_t n, const Samples& samples);
+  // The motion of o, a copy of this plant (the same axis): its state, run
+  // and friction, for much less than a copy of the whole model.
+  void take_motion(const AxisPlant& o) {
+    x_ = o.x_;
+    x0_ = o.x0_;
+    u0_ = o.u0_;
+    v_ = o.v_;
+    dir_ = o.dir_;
+    k_ = o.k_;
+    anchored_ = o.anchored_;
+    steps_ = o.steps_;
+    friction_ = o.friction_;
+    stuck_ = o.stuck_;
+  }
   // Friction off = the pure linear model. Turning it on at rest sticks.
   void set_friction(bool on);
   bool friction() const { return friction_; }
@@ -95,19 +109,33 @@ class AxisPlant {
 
   // The longest run: a new anchor is taken every kRun steps.
   static constexpr uint32_t kRun = 2048;
-  // Ad^k and the sum of Ad^j Bd for j < k, k = 0..kRun; the stuck current's
-  // a^k and b (1 + a + .. + a^(k-1)). Shared by copies.
+  // Ad^k and the sum of Ad^j Bd for j < k, k = 0..kRun, row by row (the
+  // searches read one state at a time); the stuck current's a^k and b (1 +
+  // a + .. + a^(k-1)). Shared by copies.
+  struct Power {
+    double ad[3][3];
+    double bd[3][2];
+  };
   struct Powers {
-    std::vector<Eigen::Matrix3d> ad;
-    std::vector<Eigen::Matrix<double, 3, 2>> bd;
+    std::vector<Power> k;
     std::vector<double> stuck_a, stuck_b;
   };
   // A new run from the current state with this input; the shaft moves in
   // direction dir (friction), or is stuck.
   void anchor(double volts, double dir);
-  Eigen::Vector3d run_state(uint32_t k) const { return pw_->ad[k] * x0_ + pw_->bd[k] * u0_; }
+  // State i (0 current, 1 speed, 2 angle) k steps into the run. The sums go
+  // in the order Eigen's Ad^k x0 + Bd_k u0 takes them (the figures the
+  // plant gave before it was read by rows), and every path reads the run
+  // through here.
+  double run_x(uint32_t k, int i) const {
+    const Power& p = pw_->k[k];
+    const double* a = p.ad[i];
+    const double ax = i < 2 ? a[0] * x0_(0) + a[1] * x0_(1) + a[2] * x0_(2)
+                            : a[0] * x0_(0) + (a[1] * x0_(1) + a[2] * x0_(2));
+    return ax + (p.bd[i][0] * u0_(0) + p.bd[i][1] * u0_(1));
+  }
+  Eigen::Vector3d run_state(uint32_t k) const { return {run_x(k, 0), run_x(k, 1), run_x(k, 2)}; }
   double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
-  int64_t count_of(const Eigen::Vector3d& x) const;
   // Of the next lim steps of the run, how many end without an event (a
   // count other than `count`, or friction stopping the shaft); how many
   // stuck steps come before the breakaway.
@@ -116,6 +144,7 @@ class AxisPlant {
 
   std::shared_ptr<const Powers> pw_;
   bool monotone_runs_ = false;  // real poles: a run's speed has at most one extremum
+  // The motion (take_motion() copies each of these).
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d x0_ = Eigen::Vector3d::Zero();  // the run's anchor
   Eigen::Vector2d u0_ = Eigen::Vector2d::Zero();  // its input [V, tau_ext]
