@@ -547,13 +547,39 @@ class InterpCore {
         done += m;
         continue;
       }
-      const bool moves = sq_ == STEP_MOVE && go_;
-      if (ending() || (still_last && done + 1 == n && moves)) break;
-      clock_running();
-      ++done;
-      if (moves) moved(done);
+      // A tick that is not calm stays so to its end: its clocks go in a
+      // row, each step's edge compiled in place.
+      if (!calm_) {
+        if (!run_tick(n, done, moved, still_last, std::make_index_sequence<TICK>{})) break;
+        continue;
+      }
+      if (!run_step<-1>(n, done, moved, still_last)) break;
     }
     return done;
+  }
+  // One clock of run() at tick step S (-1: sq_): false, and not done, when
+  // it is the one that would end the segment or, still_last, a last clock
+  // that moves.
+  template <int S, typename Moved>
+  bool run_step(uint32_t n, uint32_t& done, Moved& moved, bool still_last) {
+    const bool moves = (S < 0 || S == STEP_MOVE) && sq_ == STEP_MOVE && go_;
+    if (((S < 0 || S == STEP_DECIDE) && ending()) || (still_last && done + 1 == n && moves)) return false;
+    if constexpr (S < 0)
+      clock_running();
+    else
+      clock_as<true, S>(kNone);
+    ++done;
+    if (moves) moved(done);
+    return true;
+  }
+  // The clocks from step sq_ to the tick's end, up to n in all: false where
+  // run_step() stops.
+  template <typename Moved, size_t... S>
+  bool run_tick(uint32_t n, uint32_t& done, Moved& moved, bool still_last, std::index_sequence<S...>) {
+    const int from = sq_;
+    bool go = true;
+    ((go = go && (int(S) < from || done == n || run_step<int(S)>(n, done, moved, still_last))), ...);
+    return go;
   }
 
   // n calm clocks at once, from and to a step other than 1 (skip_run).
