@@ -273,6 +273,20 @@ class MotionCore {
   bool quiet_but_pid(const In& in, Let let) const {
     return quiet_but_interp(in, 1, let, true) && interp_quiet(in, 1, let.busy);
   }
+  // quiet_as(in, n, let) (false for n = 0), and where it is not,
+  // quiet_but_pid(in, let), for the checks of one: kQuiet, kPidClock or 0.
+  static constexpr int kQuiet = 2, kPidClock = 1;
+  int quiet_or_pid(const In& in, uint32_t n, Let let) const {
+    const typename Pid::In pi = pid_in(in, nullptr, nullptr);
+    const bool others = quiet_but_pid_interp(in, n, let) && interp_quiet(in, n, let.busy);
+    if (others && pid_.quiet(pi, n, let.sample)) return kQuiet;
+    // Only the sweep's drive updates (unless let.drive) and a running
+    // interpolator's next iteration (unless let.busy) depend on n.
+    const bool one = n > 0 && let.drive && let.busy
+                         ? others
+                         : quiet_but_pid_interp(in, 1, let) && interp_quiet(in, 1, let.busy);
+    return one && pid_.quiet_but_timers(pi) ? kPidClock : 0;
+  }
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a
   // copy tells how far that is).
@@ -445,6 +459,12 @@ class MotionCore {
     return ip_.run_quiet(ii) >= n;
   }
   bool quiet_but_interp(const In& in, uint32_t n, Let let, bool pid_own = false) const {
+    const typename Pid::In pi = pid_in(in, nullptr, nullptr);
+    return quiet_but_pid_interp(in, n, let) &&
+           (pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample));
+  }
+  // quiet_but_interp() without the PID's own part.
+  bool quiet_but_pid_interp(const In& in, uint32_t n, Let let) const {
     if (in.rst || in.pid_we || in.pid_re || n == 0) return false;
     if (pid_.sweep_clock() != 0 &&
         !let.drive) {  // inside a sweep: no axis takes its new drive value in the n clocks
@@ -453,8 +473,6 @@ class MotionCore {
         if (drv_clock(a) >= s && uint32_t(drv_clock(a) - s) < n && !in.drv_ovr[a]) return false;
     }
     if (!let.port && !let.sample && r_.smp_rdata != read_bank(in.smp_raddr)) return false;
-    const typename Pid::In pi = pid_in(in, nullptr, nullptr);
-    if (!(pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample))) return false;
     for (int a = 0; a < NAXES; ++a) {
       const QuadIn qi = quad_in(in, a, false);
       if (!(let.settle ? dec_[a].settle_clocks(qi) != Decoder::kUnsettled : dec_[a].quiet(qi)) ||

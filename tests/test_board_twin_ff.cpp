@@ -340,7 +340,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     Vec3 at{0, 0, 0};
     std::vector<uint32_t> words;
     int64_t count[2] = {};
-    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0;
+    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0;
     for (uint64_t clock = 0; clock < 150'000; ++clock) {
       if (words.size() < 40) {
         const PlannedSegment p = gen.any(at);
@@ -382,6 +382,17 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
         uint32_t did = 0;
         while (did < n) {
           const uint32_t q = std::min(n - did, fast.quiet_limit_as(all));
+          // quiet_or_pid() is the two looks at once, with this Let and
+          // with those whose checks depend on the stretch's length.
+          for (const Core::Let let :
+               {all, Core::Let{false, true, true, false, true}, Core::Let{false, false, true, true, true}}) {
+            const uint32_t l = std::min(n - did, fast.quiet_limit_as(let));
+            ASSERT_EQ(fast.quiet_or_pid(h, l, let), l > 0 && fast.quiet_as(h, l, let) ? Core::kQuiet
+                                                    : fast.quiet_but_pid(h, let)      ? Core::kPidClock
+                                                                                      : 0)
+                << "Ts " << ts << ", clock " << clock << "+" << did;
+            ++looks;
+          }
           if (q > 0 && fast.quiet_as(h, q, all)) {
             const uint32_t m = fast.skip_busy_as(h, q, all, [](uint32_t) {});
             did += m;
@@ -412,9 +423,10 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
       ref.clock(in);
     }
     std::printf(
-        "Ts %u: %llu jumps over %llu clocks, %llu drive updates inside, %llu clocks cycled, %llu samples\n",
+        "Ts %u: %llu jumps over %llu clocks, %llu drive updates inside, %llu clocks cycled, %llu samples, "
+        "%llu looks\n",
         ts, (unsigned long long)jumps, (unsigned long long)held, (unsigned long long)changes,
-        (unsigned long long)cycled, (unsigned long long)samples);
+        (unsigned long long)cycled, (unsigned long long)samples, (unsigned long long)looks);
     EXPECT_GT(jumps, 1000u);
     EXPECT_GT(changes, 30u);
     EXPECT_GT(samples, 30u);

@@ -50,6 +50,13 @@ class CoreModel {
   // the position command of a running segment (0: none; the RTL never
   // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
+  // The same, and where it gives 0, whether this clock is one that
+  // sample_clock() tells (for the checks of one).
+  virtual uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample) const {
+    const uint32_t q = quiet_clocks(in, limit);
+    sample = q == 0 && sample_clock(in);
+    return q;
+  }
   // Up to n of those clocks at once: returns how many it did (it stops
   // before a segment ends) and, unless first is null, the outputs and PWM
   // counter of the first; appends each change of the position command to
@@ -90,6 +97,12 @@ class TwinCore final : public CoreModel {
   uint32_t quiet_clocks(const CoreIn& in, uint32_t limit) const override {
     const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
     return n > 0 && twin_.quiet_as(in, n, let_) ? n : 0;
+  }
+  uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample) const override {
+    const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
+    const int k = twin_.quiet_or_pid(in, n, let_);
+    sample = k == CoreTwin::kPidClock && let_.sample && !segment_ends();
+    return k == CoreTwin::kQuiet ? n : 0;
   }
   DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
   uint32_t known_drive_clocks() const override { return twin_.known_drive_clocks(); }

@@ -593,7 +593,8 @@ class Machine {
     const uint64_t at = step_ * k_;
     uint64_t done = 0;
     while (done < n) {
-      const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)));
+      bool sample = false;
+      const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)), sample);
       if (q > 0) {
         const size_t from = moves_.size();
         const uint32_t m = core_->skip(in_, q, nullptr, moves_);
@@ -606,7 +607,7 @@ class Machine {
       // ends the segment: the first is cycled here, the second not; so is a
       // sample's clock. (What is not quiet for q clocks is not for one:
       // quiet_clocks bounds q to what the timers allow.)
-      if (core_->segment_ends() || (q == 0 && !core_->sample_clock(in_))) break;
+      if (core_->segment_ends() || (q == 0 && !sample)) break;
       const CoreOut o = core_->cycle(in_);
       ++res_.clocks_cycled;
       ++done;
