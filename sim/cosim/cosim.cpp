@@ -502,18 +502,20 @@ class Machine {
 
   // The twin engine's event loop: from a step boundary, the whole plant
   // steps in which the core changes nothing the plant sees (no PID tick,
-  // drive update or done, no segment loaded or ended, no encoder edge to
-  // show; a running segment's position may move) go by at once: the core
-  // skipped over them, each plant held on its drive's volts over the steps
-  // up to the first that changes its count (AxisPlant::hold). The plants
-  // take the steps the clock path takes, with the same volts, so positions
-  // and samples are the clock path's (Cosim.TwinAndRtlGiveIdenticalOutputs).
-  // The records inside take the plants' positions sampled along the hold
-  // and the command as the core's moves left it at each. A jump ends after
-  // the step in which a count changes; the next one shows the change as
-  // fpga_step does, an edge at its clock 0 (more than one edge an axis:
-  // fpga_step shows them). It ends inside a step where the core stops
-  // before an event, or a segment's end.
+  // drive update or done, no segment loaded or ended; a running segment's
+  // position may move) go by at once: the core skipped over them, each
+  // plant held on its drive's volts (AxisPlant::hold). The plants take the
+  // steps the clock path takes, with the same volts, so positions and
+  // samples are the clock path's (Cosim.TwinAndRtlGiveIdenticalOutputs).
+  // A step that starts with one new count an axis shows it as fpga_step
+  // does, an edge at its clock 0, and the jump goes on: the plants are held
+  // through the window first (their drive is known over it), each count
+  // they reach noted with its step, and the core advances to each of those
+  // steps and is shown the edge there. The records inside take the plants'
+  // positions sampled along the holds and the command as the core's moves
+  // left it at each. A jump ends after a step that brings more than one
+  // new count (fpga_step shows those), inside a step where the core stops
+  // before an event, or at a segment's end.
   bool jump(uint64_t target) {
     if (s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
     bool edge = false;
@@ -538,14 +540,23 @@ class Machine {
     // before the command starts).
     const uint64_t first =
         step_ < start_step_ ? most + 1 : record_every_ - (step_ - start_step_) % record_every_;
-    // The plants up to the first count change of either, sampled at the
-    // records.
+    // The plants through the window, sampled at the records, their counts
+    // noted.
+    int64_t count0[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) {
+      count0[a] = plant_[size_t(a)].encoder_count();
       ahead_[size_t(a)].take_motion(plant_[size_t(a)]);
       sampled_[a].clear();
-      ahead_steps_[a] = hold_driven(ahead_[size_t(a)], a, sk, most, first, &sampled_[a]);
+      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, first, &sampled_[a], counts_[a]);
       most = std::min(most, ahead_steps_[a]);
     }
+    // The edges: a count reached at the end of step s shows from clock
+    // s k_ on.
+    edges_.clear();
+    for (int a = 0; a < kCoreAxes; ++a)
+      for (const StepCount& c : counts_[a])
+        if (c.step < most) edges_.push_back(Edge{c.step * k_, a, c.count});
+    std::sort(edges_.begin(), edges_.end(), [](const Edge& x, const Edge& y) { return x.clock < y.clock; });
     int32_t cmd[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd[a] = core_->cmd(a);
     const uint64_t m = advance_core(most * k_);
@@ -554,12 +565,12 @@ class Machine {
     for (int a = 0; a < kCoreAxes && whole > 0; ++a) {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)].take_motion(ahead_[size_t(a)]);
-      else if (hold_driven(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr) != whole)
-        throw std::logic_error("co-simulation: a held plant changed its count early");
+      else if (hold_counting(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr, recount_) != whole)
+        throw std::logic_error("co-simulation: a plant held again took other steps");
     }
     // The records: a step's command is the one its last clock showed, after
-    // all its edges but the last.
-    size_t mv = 0;
+    // all its edges but the last; its count, the last the axis reached.
+    size_t mv = 0, cn[kCoreAxes] = {};
     for (uint64_t j = first, i = 0; j <= whole; j += record_every_, ++i) {
       for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
         for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
@@ -567,8 +578,9 @@ class Machine {
       int64_t count[kCoreAxes];
       for (int a = 0; a < kCoreAxes; ++a) {
         pos[a] = sampled_[a][i];
-        // Only the last step of a hold changes a count.
-        count[a] = j == whole ? plant_[size_t(a)].encoder_count() : shown_[a];
+        const std::vector<StepCount>& c = counts_[size_t(a)];
+        while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
+        count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
       }
       record_values(step_ + j, cmd, pos, count);
     }
@@ -583,8 +595,9 @@ class Machine {
     return true;
   }
 
-  // Up to n clocks of the core from the start of this step, the pins held:
-  // the quiet stretches skipped, the clocks of a PID sample cycled (the
+  // Up to n clocks of the core from the start of this step, the pins held
+  // but at edges_ (each shown at its clock, as emit_plan() shows it): the
+  // quiet stretches skipped, the clocks of a PID sample cycled (the
   // sample's output recorded at done, as fpga_step does a clock later).
   // Ends early before anything else (a segment's end). moves_ gets the
   // command's changes, counted in clocks from here. Returns the clocks done.
@@ -592,9 +605,19 @@ class Machine {
     moves_.clear();
     const uint64_t at = step_ * k_;
     uint64_t done = 0;
+    size_t e = 0;
     while (done < n) {
+      if (e < edges_.size() && edges_[e].clock == done) {
+        int64_t to[kCoreAxes];
+        for (int a = 0; a < kCoreAxes; ++a) to[a] = shown_[a];
+        for (; e < edges_.size() && edges_[e].clock == done; ++e) to[edges_[e].axis] = edges_[e].count;
+        show(to);
+        set_encoder_pins(0);
+      }
+      const uint64_t until = e < edges_.size() ? std::min<uint64_t>(n, edges_[e].clock) : n;
       bool sample = false;
-      const uint32_t q = core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)), sample);
+      const uint32_t q =
+          core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(until - done, 1u << 30)), sample);
       if (q > 0) {
         const size_t from = moves_.size();
         const uint32_t m = core_->skip(in_, q, nullptr, moves_);
@@ -625,16 +648,21 @@ class Machine {
     return done;
   }
 
-  // Up to n whole plant steps of a skip that sk.drive describes, as the
+  // A count an axis reached at the end of a step of a jump (from 1).
+  struct StepCount {
+    uint64_t step;
+    int64_t count;
+  };
+  // Steps s0 + 1 .. n (from 1) of a skip that sk.drive describes, as the
   // clock path takes them (each step on the mean of its clocks' volts,
-  // StepVolts), stopping after the first that changes the count; positions
-  // sampled after steps first, first + record_every_, ... (from 1) into
-  // *out. Returns the steps taken.
-  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
+  // StepVolts), up to n or the first that changes the count; positions
+  // sampled after steps first, first + record_every_, ... into *out.
+  // Returns the last step taken.
+  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n, uint64_t first,
                        std::vector<double>* out) {
     const DriveSteps& ds = sk.drive[a];
     const int64_t count = p.encoder_count();
-    uint64_t s = 0;
+    uint64_t s = s0;
     while (s < n) {
       const uint64_t c0 = s * k_;
       // The next clock with another drive value.
@@ -663,13 +691,35 @@ class Machine {
     return s;
   }
 
+  // Up to n steps of hold_driven(), through the count changes: each count
+  // reached goes in *counts with its step. Ends at n or after a step that
+  // brings more than one new count. Returns the last step taken.
+  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
+                         std::vector<double>* out, std::vector<StepCount>& counts) {
+    counts.clear();
+    uint64_t s = 0;
+    while (s < n) {
+      const int64_t before = p.encoder_count();
+      s = hold_driven(p, a, sk, s, n, first, out);
+      const int64_t now = p.encoder_count();
+      if (now == before) break;
+      counts.push_back(StepCount{s, now});
+      if (now - before > 1 || now - before < -1) break;
+    }
+    return s;
+  }
+
   // Encoder pins: the counts the plant reached at the start of the step are
   // shown one edge every other clock (the decoder's limit is about one per
   // clock), more than half a step's worth carried to the next step.
   void emit_plan() {
+    int64_t to[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) to[a] = plant_[size_t(a)].encoder_count();
+    show(to);
+  }
+  void show(const int64_t* target) {
     for (int a = 0; a < kCoreAxes; ++a) {
-      const int64_t target = plant_[size_t(a)].encoder_count();
-      const int64_t d = std::clamp<int64_t>(target - shown_[a], -int64_t(k_ / 2), int64_t(k_ / 2));
+      const int64_t d = std::clamp<int64_t>(target[a] - shown_[a], -int64_t(k_ / 2), int64_t(k_ / 2));
       emit_from_[a] = shown_[a];
       emit_n_[a] = d;
       shown_[a] += d;
@@ -922,8 +972,16 @@ class Machine {
   std::vector<AxisPlant> plant_;
   std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead
   uint64_t ahead_steps_[kCoreAxes] = {};
-  std::vector<double> sampled_[kCoreAxes];  // jump(): their positions at the records
-  std::vector<CmdChange> moves_;            // jump(): the command's changes in the skip
+  std::vector<double> sampled_[kCoreAxes];              // jump(): their positions at the records
+  std::vector<StepCount> counts_[kCoreAxes], recount_;  // jump(): the counts they reached
+  // jump(): the edges to show the core, in clocks from the jump's start.
+  struct Edge {
+    uint64_t clock;
+    int axis;
+    int64_t count;
+  };
+  std::vector<Edge> edges_;
+  std::vector<CmdChange> moves_;  // jump(): the command's changes in the skip
   mc::host::PidGains gains_[kCoreAxes];
   std::vector<HostLoop> host_;
   DriveConfig dac_[kCoreAxes]{};
