@@ -32,6 +32,24 @@ void print(const RunResult& r) {
       (unsigned long long)r.clocks_cycled, (unsigned long long)r.clocks_skipped, r.tracking);
 }
 
+// The twin's run of s (an RTL spec), checked against the RTL's: the same
+// controller outputs, sample for sample, hence the same plant motion and
+// trace.
+RunResult twin_like(const RunResult& rtl, RunSpec s) {
+  s.engine = Engine::Twin;
+  const RunResult twin = run_isolated(s);
+  print(rtl);
+  print(twin);
+  EXPECT_EQ(rtl.sample_clock, twin.sample_clock);
+  for (size_t a = 0; a < 2; ++a) {
+    EXPECT_EQ(rtl.sample_u[a], twin.sample_u[a]) << "axis " << a;
+    EXPECT_EQ(rtl.pos_m[a], twin.pos_m[a]) << "axis " << a;
+    EXPECT_EQ(rtl.cmd_m[a], twin.cmd_m[a]) << "axis " << a;
+  }
+  EXPECT_GT(twin.clocks_skipped, 0u);
+  return twin;
+}
+
 // The twin-only path and the RTL path: the same controller outputs, sample
 // for sample, hence the same plant motion.
 TEST(Cosim, TwinAndRtlGiveIdenticalOutputs) {
@@ -48,19 +66,8 @@ TEST(Cosim, TwinAndRtlGiveIdenticalOutputs) {
       s.platform = p;
       s.record_dt_s = 1e-5;
       const RunResult rtl = run_isolated(s);
-      s.engine = Engine::Twin;
-      const RunResult twin = run_isolated(s);
-      print(rtl);
-      print(twin);
+      const RunResult twin = twin_like(rtl, s);
       ASSERT_GT(rtl.sample_u[0].size(), 100u);
-      EXPECT_EQ(rtl.sample_clock, twin.sample_clock);
-      EXPECT_EQ(rtl.sample_u[0], twin.sample_u[0]);
-      EXPECT_EQ(rtl.sample_u[1], twin.sample_u[1]);
-      EXPECT_EQ(rtl.pos_m[0], twin.pos_m[0]);
-      EXPECT_EQ(rtl.pos_m[1], twin.pos_m[1]);
-      EXPECT_EQ(rtl.cmd_m[0], twin.cmd_m[0]);
-      EXPECT_EQ(rtl.cmd_m[1], twin.cmd_m[1]);
-      EXPECT_GT(twin.clocks_skipped, 0u);
     }
 }
 
@@ -72,13 +79,8 @@ TEST(Cosim, TwinAndRtlGiveTheSameJobCounts) {
   s.scenario = bench_job(s.machine, "", true);
   s.record_dt_s = 1e-4;  // as `motionctl cosim --scenario job` records
   const RunResult rtl = run_isolated(s);
-  s.engine = Engine::Twin;
-  const RunResult twin = run_isolated(s);
-  print(rtl);
-  print(twin);
+  const RunResult twin = twin_like(rtl, s);
   ASSERT_GT(rtl.sample_u[0].size(), 1000u);
-  EXPECT_EQ(rtl.sample_u[0], twin.sample_u[0]);
-  EXPECT_EQ(rtl.pos_m[0], twin.pos_m[0]);
   EXPECT_GT(rtl.measured_contour.max, 0);
   EXPECT_EQ(rtl.measured_contour.rms, twin.measured_contour.rms);
   EXPECT_EQ(rtl.measured_contour.max, twin.measured_contour.max);
