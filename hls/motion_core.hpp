@@ -275,10 +275,12 @@ class MotionCore {
   }
   // quiet_as(in, n, let) (false for n = 0), and where it is not,
   // quiet_but_pid(in, let), for the checks of one: kQuiet, kPidClock or 0.
+  // *others_out (unless null): whether the checks but the PID's held.
   static constexpr int kQuiet = 2, kPidClock = 1;
-  int quiet_or_pid(const In& in, uint32_t n, Let let) const {
+  int quiet_or_pid(const In& in, uint32_t n, Let let, bool* others_out = nullptr) const {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
     const bool others = quiet_but_pid_interp(in, n, let) && interp_quiet(in, n, let.busy);
+    if (others_out) *others_out = n > 0 && let.drive && let.busy && others;
     if (others && pid_.quiet(pi, n, let.sample)) return kQuiet;
     // Only the sweep's drive updates (unless let.drive) and a running
     // interpolator's next iteration (unless let.busy) depend on n.
@@ -286,6 +288,18 @@ class MotionCore {
                          ? others
                          : quiet_but_pid_interp(in, 1, let) && interp_quiet(in, 1, let.busy);
     return one && pid_.quiet_but_timers(pi) ? kPidClock : 0;
+  }
+  // quiet_or_pid(in, n, let) where it last told *others_out with these
+  // inputs, and only skip_busy_as(in, .., let) and clock(in) of what it
+  // allowed came since: none of those changes the other checks' answer
+  // (decoders stay quiet, or settle on along the same path, a sample
+  // strobe or not; the interpolator stays idle, or running short of its
+  // end; the drive enables are what the inputs make them). Only the PID's
+  // are asked.
+  int quiet_or_pid_again(const In& in, uint32_t n, Let let) const {
+    const typename Pid::In pi = pid_in(in, nullptr, nullptr);
+    if (n > 0 && pid_.quiet(pi, n, let.sample)) return kQuiet;
+    return pid_.quiet_but_timers(pi) ? kPidClock : 0;
   }
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a

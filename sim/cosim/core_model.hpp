@@ -51,8 +51,10 @@ class CoreModel {
   // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
   // The same, and where it gives 0, whether this clock is one that
-  // sample_clock() tells (for the checks of one).
-  virtual uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample) const {
+  // sample_clock() tells (for the checks of one). again: in is what the
+  // last call was given, and only skip() and cycle() with it came since
+  // (the twin then asks only what those can change).
+  virtual uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample, bool /*again*/) const {
     const uint32_t q = quiet_clocks(in, limit);
     sample = q == 0 && sample_clock(in);
     return q;
@@ -98,9 +100,10 @@ class TwinCore final : public CoreModel {
     const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
     return n > 0 && twin_.quiet_as(in, n, let_) ? n : 0;
   }
-  uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample) const override {
+  uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample, bool again) const override {
     const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
-    const int k = twin_.quiet_or_pid(in, n, let_);
+    const bool known = again && others_;
+    const int k = known ? twin_.quiet_or_pid_again(in, n, let_) : twin_.quiet_or_pid(in, n, let_, &others_);
     sample = k == CoreTwin::kPidClock && let_.sample && !segment_ends();
     return k == CoreTwin::kQuiet ? n : 0;
   }
@@ -148,6 +151,8 @@ class TwinCore final : public CoreModel {
   }
   CoreTwin::Let let_;
   CoreTwin twin_;
+  // What the last quiet_clocks() found of the checks but the PID's.
+  mutable bool others_ = false;
 };
 
 }  // namespace mc::sim

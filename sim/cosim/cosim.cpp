@@ -606,8 +606,10 @@ class Machine {
     const uint64_t at = step_ * k_;
     uint64_t done = 0;
     size_t e = 0;
+    bool again = false;  // the pins as the last look saw them
     while (done < n) {
       if (e < edges_.size() && edges_[e].clock == done) {
+        again = false;
         int64_t to[kCoreAxes];
         for (int a = 0; a < kCoreAxes; ++a) to[a] = shown_[a];
         for (; e < edges_.size() && edges_[e].clock == done; ++e) to[edges_[e].axis] = edges_[e].count;
@@ -617,7 +619,8 @@ class Machine {
       const uint64_t until = e < edges_.size() ? std::min<uint64_t>(n, edges_[e].clock) : n;
       bool sample = false;
       const uint32_t q =
-          core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(until - done, 1u << 30)), sample);
+          core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(until - done, 1u << 30)), sample, again);
+      again = true;
       if (q > 0) {
         const size_t from = moves_.size();
         const uint32_t m = core_->skip(in_, q, nullptr, moves_);
