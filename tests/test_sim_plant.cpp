@@ -143,6 +143,16 @@ TEST(SimPlant, TablePositionAndEncoderQuantization) {
   }
   p.reset(-1e-9);
   EXPECT_EQ(p.encoder_count(), -1);  // floor, not truncation toward 0
+  // Random angles, whole counts and their neighbours among them, on both
+  // sides of zero: the count is floor()'s.
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 200000; ++i) {
+    double theta = std::uniform_real_distribution<double>(-1e4, 1e4)(rng);
+    if (i % 2 == 0) theta = std::round(theta / (2 * kPi) * cfg.encoder_cpr) * (2 * kPi) / cfg.encoder_cpr;
+    if (i % 4 == 0) theta = std::nextafter(theta, i % 8 == 0 ? 1e9 : -1e9);
+    p.reset(theta);
+    ASSERT_EQ(p.encoder_count(), int64_t(std::floor(theta * (cfg.encoder_cpr / (2 * kPi))))) << theta;
+  }
   EXPECT_DOUBLE_EQ(counts_per_m(cfg), 2000 / 0.005);
 }
 

@@ -388,7 +388,7 @@ class Machine {
 
   uint64_t step_index() const { return step_; }
   uint64_t end_step() const { return end_step_; }
-  double dt() const { return s_.machine.plant_dt_s; }
+  double dt() const { return dt_; }
   bool host() const { return s_.platform.host; }
   // The plant step at or after which the PC next wakes.
   uint64_t next_wake_step() const { return uint64_t(std::ceil(host_[0].next_wake_s() / dt() - 1e-9)); }
@@ -958,17 +958,20 @@ class Machine {
   }
   // The trace's sample at the end of plant step `step`.
   void record_values(uint64_t step, const int32_t* cmd, const double* pos_m, const int64_t* count) {
-    res_.t.push_back(double(step - start_step_) * dt());
+    res_.t.push_back(double(step - start_step_) * dt_);
     for (int a = 0; a < kCoreAxes; ++a) {
       res_.cmd_m[size_t(a)].push_back(double(cmd[a]) / cpm_);
       res_.pos_m[size_t(a)].push_back(pos_m[a]);
-      if (s_.scenario.kind == ScenarioKind::Job) enc_[size_t(a)].push_back(count[a]);
     }
+    if (job_)
+      for (int a = 0; a < kCoreAxes; ++a) enc_[size_t(a)].push_back(count[a]);
   }
 
   const RunSpec& s_;
   const uint32_t k_;
   const double cpm_ = counts_per_m(s_.machine.axes[0]);  // the command's counts per metre
+  const double dt_ = s_.machine.plant_dt_s;
+  const bool job_ = s_.scenario.kind == ScenarioKind::Job;  // the trace keeps the encoder counts
   Command cmd_;
   SegmentFeed feed_;
   std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record

@@ -178,8 +178,7 @@ uint32_t last_of_sign(uint32_t lo, uint32_t hi, F f) {
 
 uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   const auto event = [&](uint32_t j) {
-    return (friction_ && run_x(j, 1) * dir_ <= 0) ||
-           int64_t(std::floor(run_x(j, 2) * rad_to_count_)) != count;
+    return (friction_ && run_x(j, 1) * dir_ <= 0) || count_at(run_x(j, 2)) != count;
   };
   const auto accel = [&](uint32_t j) {
     return m_.kt_nm_per_a * run_x(j, 0) - m_.b_nm_s_per_rad * run_x(j, 1) - u0_(1);
@@ -256,10 +255,6 @@ void AxisPlant::set_friction(bool on) {
 
 double AxisPlant::position_m() const {
   return x_(2) * rad_to_m_;
-}
-
-int64_t AxisPlant::encoder_count() const {
-  return int64_t(std::floor(x_(2) * rad_to_count_));
 }
 
 void AxisPlant::reset(double position_rad) {

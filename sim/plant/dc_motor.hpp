@@ -81,7 +81,7 @@ class AxisPlant {
   // Table: position_rad / (2 pi) / gear_ratio * lead.
   double position_m() const;
   // floor(position_rad / (2 pi) * encoder_cpr): the exact quantization.
-  int64_t encoder_count() const;
+  int64_t encoder_count() const { return count_at(x_(2)); }
   bool stuck() const { return stuck_; }
   void reset(double position_rad = 0);
 
@@ -141,6 +141,15 @@ class AxisPlant {
   // stuck steps come before the breakaway.
   uint32_t steps_before_event(uint32_t lim, int64_t count) const;
   uint32_t steps_before_breakaway(uint32_t lim) const;
+
+  // floor(theta * counts per radian), as floor() gives it but without a
+  // library call (the searches ask it often): truncation, one down for a
+  // negative fraction. Exact for any count an int64 holds.
+  int64_t count_at(double theta_rad) const {
+    const double c = theta_rad * rad_to_count_;
+    const int64_t t = int64_t(c);
+    return double(t) > c ? t - 1 : t;
+  }
 
   std::shared_ptr<const Powers> pw_;
   bool monotone_runs_ = false;  // real poles: a run's speed has at most one extremum
