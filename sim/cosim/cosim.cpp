@@ -571,18 +571,23 @@ class Machine {
     // The records: a step's command is the one its last clock showed, after
     // all its edges but the last; its count, the last the axis reached.
     size_t mv = 0, cn[kCoreAxes] = {};
+    double cmd_m[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
     for (uint64_t j = first, i = 0; j <= whole; j += record_every_, ++i) {
-      for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
-        for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
-      double pos[kCoreAxes];
-      int64_t count[kCoreAxes];
-      for (int a = 0; a < kCoreAxes; ++a) {
-        pos[a] = sampled_[a][i];
-        const std::vector<StepCount>& c = counts_[size_t(a)];
-        while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
-        count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
+      if (mv < moves_.size() && moves_[mv].clock <= j * k_ - 1) {
+        for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
+          for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
+        for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
       }
-      record_values(step_ + j, cmd, pos, count);
+      const double pos[kCoreAxes] = {sampled_[0][i], sampled_[1][i]};
+      int64_t count[kCoreAxes] = {};
+      if (job_)
+        for (int a = 0; a < kCoreAxes; ++a) {
+          const std::vector<StepCount>& c = counts_[size_t(a)];
+          while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
+          count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
+        }
+      record_metres(step_ + j, cmd_m, pos, count);
     }
     step_ += whole;
     for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = core_->cmd(a);
@@ -958,9 +963,14 @@ class Machine {
   }
   // The trace's sample at the end of plant step `step`.
   void record_values(uint64_t step, const int32_t* cmd, const double* pos_m, const int64_t* count) {
+    double cmd_m[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
+    record_metres(step, cmd_m, pos_m, count);
+  }
+  void record_metres(uint64_t step, const double* cmd_m, const double* pos_m, const int64_t* count) {
     res_.t.push_back(double(step - start_step_) * dt_);
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].push_back(double(cmd[a]) / cpm_);
+      res_.cmd_m[size_t(a)].push_back(cmd_m[a]);
       res_.pos_m[size_t(a)].push_back(pos_m[a]);
     }
     if (job_)
