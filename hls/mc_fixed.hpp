@@ -75,11 +75,20 @@ constexpr uint32_t coef_pack(Coef c) {
 // The shared multiply-and-align step: m * x aligned into the accumulator
 // format, i.e. round((m * x * 2^32) / 2^s), rounding half up, saturated.
 // The RTL forms exactly {p, 32'b0} + 2^(s-1), shifts right by s, saturates.
+// In 64 bits: with s >= 32 the shift takes the 32 zero bits and s - 32 of
+// the product, the rounding bit landing inside it; below, the rounding bit
+// falls among the zeros and the result is the product shifted left, which
+// saturates exactly where it leaves ACC_W bits.
 constexpr int64_t mul_align(Coef c, int32_t x) {
-  const i128 p = i128(c.m) * x;        // PROD_W bits, exact
-  i128 t = p * (i128(1) << ACC_FRAC);  // {p, 32'b0}
-  if (c.s > 0) t += i128(1) << (c.s - 1);
-  return sat_acc(t >> c.s);  // arithmetic shift: floor division
+  const int64_t p = int64_t(c.m) * x;  // PROD_W bits, exact
+  if (c.s >= ACC_FRAC) {
+    const int q = c.s - ACC_FRAC;
+    const int64_t r = q == 0 ? p : (p + (int64_t(1) << (q - 1))) >> q;  // arithmetic: floor
+    return r > smax(ACC_W) ? smax(ACC_W) : (r < smin(ACC_W) ? smin(ACC_W) : r);
+  }
+  const int k = ACC_FRAC - c.s;                       // 1..32
+  const int64_t lim = int64_t(1) << (ACC_W - 1 - k);  // |p 2^k| within ACC_W bits below it
+  return p >= lim ? smax(ACC_W) : (p < -lim ? smin(ACC_W) : p * (int64_t(1) << k));
 }
 
 // The same product in the two parts the RTL delivers (rtl/mul_align.v):
