@@ -41,14 +41,24 @@ constexpr int64_t smin(int w) {
   return -(int64_t(1) << (w - 1));
 }
 
-// Saturate a wide value to a signed w-bit range (w <= 63).
+// Saturate a wide value to a signed w-bit range (w <= 63). The 64-bit
+// forms serve sums of accumulator-wide values, which never leave 52 bits.
 constexpr int64_t sat(i128 v, int w) {
   return v > smax(w) ? smax(w) : (v < smin(w) ? smin(w) : int64_t(v));
+}
+constexpr int64_t sat(int64_t v, int w) {
+  return v > smax(w) ? smax(w) : (v < smin(w) ? smin(w) : v);
 }
 constexpr int32_t sat32(i128 v) {
   return int32_t(sat(v, 32));
 }
+constexpr int32_t sat32(int64_t v) {
+  return int32_t(sat(v, 32));
+}
 constexpr int64_t sat_acc(i128 v) {
+  return sat(v, ACC_W);
+}
+constexpr int64_t sat_acc(int64_t v) {
   return sat(v, ACC_W);
 }
 
@@ -115,13 +125,13 @@ constexpr MulAlignParts mul_align_parts(Coef c, int32_t x) {
 
 // Accumulator (Q.32) to output units, round half up, saturated to OUT_W.
 constexpr int32_t acc_to_out(int64_t v) {
-  return int32_t(sat((i128(v) + (i128(1) << (ACC_FRAC - 1))) >> ACC_FRAC, OUT_W));
+  return int32_t(sat((v + (int64_t(1) << (ACC_FRAC - 1))) >> ACC_FRAC, OUT_W));
 }
 
 // Accumulator to the Q17.15 multiplier operand, round half up, saturated.
 constexpr int32_t acc_to_doper(int64_t v) {
   constexpr int sh = ACC_FRAC - D_OPER_FRAC;
-  return sat32((i128(v) + (i128(1) << (sh - 1))) >> sh);
+  return sat32((v + (int64_t(1) << (sh - 1))) >> sh);
 }
 
 // A free-running PWM counter of period P compared with a duty d <= P held

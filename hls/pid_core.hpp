@@ -67,7 +67,7 @@ struct PidOut {
 
 // Deadband then clamp, on the saturated difference command - feedback.
 inline int32_t pid_error(int32_t cmd, int32_t fb, uint32_t dband_w, uint32_t elim_w) {
-  const int32_t e_raw = sat32(i128(cmd) - fb);
+  const int32_t e_raw = sat32(int64_t(cmd) - fb);
   const int64_t db = dband_w & 0x7FFFFFFFu;
   const int64_t el = elim_w & 0x7FFFFFFFu;
   int64_t e = e_raw > db ? e_raw - db : (e_raw < -db ? e_raw + db : 0);
@@ -87,10 +87,10 @@ inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int
   using namespace pid_reg;
   PidOut o;
   const int32_t e = pid_error(cmd, fb, p.word[DBAND], p.word[ELIM]);
-  const int32_t sum_e = sat32(i128(e) + st.e1);
-  const int32_t dif_e = sat32(i128(e) - st.e1);
-  const int32_t vel = sat32(i128(cmd) - st.c1);
-  const int32_t acc = sat32(i128(cmd) - 2 * i128(st.c1) + st.c2);
+  const int32_t sum_e = sat32(int64_t(e) + st.e1);
+  const int32_t dif_e = sat32(int64_t(e) - st.e1);
+  const int32_t vel = sat32(int64_t(cmd) - st.c1);
+  const int32_t acc = sat32(int64_t(cmd) - 2 * int64_t(st.c1) + st.c2);
   o.err = e;
   if (!enable) {
     // Disabled: output 0 and the dynamic state cleared; the error and command
@@ -113,24 +113,24 @@ inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int
   const int64_t il_w = p.word[ILIM] & 0xFFFF;
   const int64_t ibound = (il_w != 0 && (il_w << ACC_FRAC) < ulim) ? (il_w << ACC_FRAC) : ulim;
 
-  int64_t i_c = sat_acc(i128(st.i) + di);
+  int64_t i_c = sat_acc(st.i + di);
   i_c = i_c > ibound ? ibound : (i_c < -ibound ? -ibound : i_c);
-  const int64_t dn = sat_acc(i128(da) + db);
-  const int64_t ff = sat_acc(i128(f1) + f2);
-  const int64_t rest = sat_acc(i128(sat_acc(i128(pterm) + dn)) + ff);
-  const int64_t v = sat_acc(i128(rest) + i_c);
+  const int64_t dn = sat_acc(da + db);
+  const int64_t ff = sat_acc(f1 + f2);
+  const int64_t rest = sat_acc(sat_acc(pterm + dn) + ff);
+  const int64_t v = sat_acc(rest + i_c);
 
   int64_t i_n = i_c;
   if (v > ulim) {
-    const int64_t head = sat_acc(i128(ulim) - rest);
+    const int64_t head = sat_acc(ulim - rest);
     const int64_t cap = head > st.i ? head : st.i;
     i_n = i_c < cap ? i_c : cap;
   } else if (v < -ulim) {
-    const int64_t head = sat_acc(i128(-ulim) - rest);
+    const int64_t head = sat_acc(-ulim - rest);
     const int64_t cap = head < st.i ? head : st.i;
     i_n = i_c > cap ? i_c : cap;
   }
-  const int32_t u = acc_to_out(sat_acc(i128(rest) + i_n));
+  const int32_t u = acc_to_out(sat_acc(rest + i_n));
   const int32_t ul = int32_t(ulim >> ACC_FRAC);
   o.u = u > ul ? ul : (u < -ul ? -ul : u);
   o.sat = v > ulim || v < -ulim;
