@@ -566,11 +566,40 @@ class InterpCore {
     if (((S < 0 || S == STEP_DECIDE) && ending()) || (still_last && done + 1 == n && moves)) return false;
     if constexpr (S < 0)
       clock_running();
+    else if (idle_step<S>())
+      pass_step<S>();
     else
       clock_as<true, S>(kNone);
     ++done;
     if (moves) moved(done);
     return true;
+  }
+  // With no iteration going, a running tick's step S writes nothing and
+  // sets no flag: 6 and 10 to 15 (their writes wait for the iteration),
+  // and 7 and 8 but on a line (which notes there which axes step).
+  // pass_step() is that clock: the step counter, the read ports as it
+  // addresses them, and at the tick's end the calm flags, as the edge sets
+  // them (RunSkipEqualsClocks and the motion-core twin tests hold it to
+  // clock()).
+  template <int S>
+  bool idle_step() const {
+    return !go_ && (S == 6 || S >= 10 || ((S == 7 || S == 8) && type_ != seg::T_LINE));
+  }
+  template <int S>
+  void pass_step() {
+    const Addr next = next_addr(ST_RUN, S, movex_ ? 4 : 5);
+    ra_ = mem_[next.a];
+    rb_ = mem_[next.b];
+    ra_addr_ = uint8_t(next.a);
+    rb_addr_ = uint8_t(next.b);
+    rv_ = false;
+    ridx_ = widx_;
+    sq_ = (S + 1) & (TICK - 1);
+    if (sq_ == 0) {
+      calm_ = !tick_strobe_ && pend_ == 0 && calm_seen_;
+      calm_seen_ = true;
+      tick_strobe_ = false;
+    }
   }
   // The clocks from step sq_ to the tick's end, up to n in all: false where
   // run_step() stops.
