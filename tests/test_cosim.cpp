@@ -37,7 +37,7 @@ void print(const RunResult& r) {
 // trace.
 RunResult twin_like(const RunResult& rtl, RunSpec s) {
   s.engine = Engine::Twin;
-  const RunResult twin = run_isolated(s);
+  RunResult twin = run_isolated(s);
   print(rtl);
   print(twin);
   EXPECT_EQ(rtl.sample_clock, twin.sample_clock);
