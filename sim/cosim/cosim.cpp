@@ -979,9 +979,9 @@ class Machine {
 
   const RunSpec& s_;
   const uint32_t k_;
-  const double cpm_ = counts_per_m(s_.machine.axes[0]);  // the command's counts per metre
-  const double dt_ = s_.machine.plant_dt_s;
   const bool job_ = s_.scenario.kind == ScenarioKind::Job;  // the trace keeps the encoder counts
+  const double cpm_ = counts_per_m(s_.machine.axes[0]);     // the command's counts per metre
+  const double dt_ = s_.machine.plant_dt_s;
   Command cmd_;
   SegmentFeed feed_;
   std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
@@ -1007,12 +1007,12 @@ class Machine {
   CoreIn in_;
   uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1;
   int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
-  int32_t cmd_now_[kCoreAxes] = {};
-  bool pending_ = false;
   uint64_t done_clock_ = 0;
-  int16_t volts_u_[kCoreAxes] = {};  // clock_volts' last drive value and its volts
-  double volts_v_[kCoreAxes] = {};
+  double volts_v_[kCoreAxes] = {};  // clock_volts' last drive value's volts
+  int32_t cmd_now_[kCoreAxes] = {};
+  int16_t volts_u_[kCoreAxes] = {};  // ... and the value
   bool volts_set_[kCoreAxes] = {};
+  bool pending_ = false;
   RunResult res_;
 };
 
