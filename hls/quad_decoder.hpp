@@ -84,7 +84,7 @@ class QuadDecoder {
     // the next values go straight into r_ (n).
     const Regs r = r_;
     Regs& n = r_;
-    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t pins = pins_of(in);
     const uint32_t len = in.filt_len & ones(FILT_W);
 
     // Synchronizers.
@@ -106,7 +106,7 @@ class QuadDecoder {
     }
     n.filt = in.rst ? r.sync : r.filt ^ pass;
 
-    const uint32_t sync_other = ((r.sync & 1) << 1) | ((r.sync >> 1) & 1);
+    const uint32_t sync_other = other_of(r.sync);
     for (int c = 0; c < 2; ++c) {
       const bool d = (differ >> c) & 1, p = (pass >> c) & 1;
       if (in.rst || !d || p) n.oth = (n.oth & ~(1u << c)) | (sync_other & (1u << c));
@@ -210,12 +210,8 @@ class QuadDecoder {
   // PID's tick, every sample) publishes the velocity and the age as well,
   // and skip_sampled() is that clock, for much less than step().
   bool quiet_but_sample(const QuadIn& in) const {
-    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
-    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
     return !in.rst && !in.latch && !(POS_LOAD && in.pos_load) && !in.idx_arm && !in.idx_disarm &&
-           !in.err_clr && pins == r_.meta && pins == r_.sync && pins == r_.filt && r_.cnt[0] == 0 &&
-           r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step && !r_.qerr && !r_.z_rise &&
-           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+           !in.err_clr && pins_of(in) == r_.meta && settled();
   }
   void skip_sampled() {
     r_.vel_o = r_.vel_acc;
@@ -240,7 +236,7 @@ class QuadDecoder {
     if (clean_edge(in)) {
       // A move or a rising index is registered at the filter's pass and
       // gone a clock later; anything else is over with the pass.
-      const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+      const uint32_t pins = pins_of(in);
       const uint32_t pass = pins ^ r_.meta;
       return (pass & 3) != 0 || (pass & pins & 4) != 0 ? kEdgeClocks : kEdgeClocks - 1;
     }
@@ -310,22 +306,32 @@ class QuadDecoder {
   // (QuadTwinFastForward holds it to step()).
   static constexpr uint32_t kEdgeClocks = 4;
   bool clean_edge(const QuadIn& in) const {
-    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t pins = pins_of(in);
     const uint32_t pass = pins ^ r_.meta;
-    const uint32_t sync_other = ((r_.sync & 1) << 1) | ((r_.sync >> 1) & 1);
     return (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
-           !(r_.idx_armed_o && (pass & pins & 4)) && r_.meta == r_.sync && r_.sync == r_.filt &&
-           r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 && r_.oth == sync_other && !r_.step &&
-           !r_.qerr && !r_.z_rise && (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+           !(r_.idx_armed_o && (pass & pins & 4)) && settled();
   }
+  // Everything through the synchronizers and filters on the pins last
+  // seen (meta), nothing registered: quiet() with those pins held, strobes
+  // aside.
+  bool settled() const {
+    return r_.meta == r_.sync && r_.sync == r_.filt && r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 &&
+           r_.oth == other_of(r_.sync) && !r_.step && !r_.qerr && !r_.z_rise &&
+           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
+  }
+  static uint32_t pins_of(const QuadIn& in) {
+    return uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+  }
+  // A and B swapped: what each channel's "other" register holds.
+  static uint32_t other_of(uint32_t ab) { return ((ab & 1) << 1) | ((ab >> 1) & 1); }
   void settle_edge(const QuadIn& in) {
-    const uint32_t pins = uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t pins = pins_of(in);
     const bool a_mv = (pins ^ r_.meta) & 1, b_mv = ((pins ^ r_.meta) >> 1) & 1;
     // Clock 3 registers the move's direction from the new synchronizer and
     // the old filter; clock 4 counts it.
     const bool step = a_mv != b_mv, up = fwd_of(pins, r_.filt, a_mv) != in.dir_inv;
     r_.meta = r_.sync = r_.filt = pins;
-    r_.oth = ((pins & 1) << 1) | ((pins >> 1) & 1);
+    r_.oth = other_of(pins);
     r_.fwd = fwd_of(pins, pins, false);
     if (step) {
       r_.pos_o += up ? 1u : ~0u;
