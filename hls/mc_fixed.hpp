@@ -93,8 +93,7 @@ constexpr int64_t mul_align(Coef c, int32_t x) {
   const int64_t p = int64_t(c.m) * x;  // PROD_W bits, exact
   if (c.s >= ACC_FRAC) {
     const int q = c.s - ACC_FRAC;
-    const int64_t r = q == 0 ? p : (p + (int64_t(1) << (q - 1))) >> q;  // arithmetic: floor
-    return r > smax(ACC_W) ? smax(ACC_W) : (r < smin(ACC_W) ? smin(ACC_W) : r);
+    return sat_acc(q == 0 ? p : (p + (int64_t(1) << (q - 1))) >> q);  // arithmetic: floor
   }
   const int k = ACC_FRAC - c.s;                       // 1..32
   const int64_t lim = int64_t(1) << (ACC_W - 1 - k);  // |p 2^k| within ACC_W bits below it

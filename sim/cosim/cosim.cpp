@@ -444,15 +444,14 @@ class Machine {
   // true table position, and of the encoder counts the board would report.
   void job_contour() {
     const mc::machine::Job& j = *s_.scenario.job;
-    const double cpm = cpm_;
     const size_t n = res_.t.size();
     std::vector<std::array<int32_t, 3>> cmd(n);
     std::vector<mc::host::Vec3d> pos(n), enc(n);
     for (size_t i = 0; i < n; ++i) {
       for (size_t a = 0; a < size_t(kCoreAxes); ++a) {
-        cmd[i][a] = int32_t(std::llround(res_.cmd_m[a][i] * cpm));
+        cmd[i][a] = int32_t(std::llround(res_.cmd_m[a][i] * cpm_));
         pos[i][a] = res_.pos_m[a][i] * 1e3;
-        enc[i][a] = double(enc_[a][i]) / cpm * 1e3;
+        enc[i][a] = double(enc_[a][i]) / cpm_ * 1e3;
       }
       cmd[i][2] = 0;
       pos[i][2] = enc[i][2] = 0;
