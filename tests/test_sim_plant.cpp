@@ -350,11 +350,14 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       const auto t0 = std::chrono::steady_clock::now();
       // Half the holds sample the position along the way, as the
       // co-simulation's trace does.
-      std::vector<double> samples;
+      // Room for every sample the stretch could take, and no more.
       const uint64_t first = 1 + rng() % 16, every = 1 + rng() % 12;
       const bool sampled = rng() % 2 == 0;
-      const uint64_t took =
-          sampled ? held.hold(v, n - done, {first, every, &samples}) : held.hold(v, n - done);
+      std::vector<double> samples(sampled && n - done >= first ? (n - done - first) / every + 1 : 0);
+      AxisPlant::Samples out{first, every, samples.data(), samples.size()};
+      const uint64_t took = sampled ? held.hold(v, n - done, out) : held.hold(v, n - done);
+      samples.resize(samples.size() - out.room);
+      ASSERT_EQ(out.out, samples.data() + samples.size());
       hold_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       total += took;
       ASSERT_GE(took, 1u);
@@ -417,6 +420,37 @@ TEST(SimPlant, HoldTakesTheStepsStepWouldTake) {
   z.load_force_n = 60;  // a Z axis: gravity through the screw
   check_hold(z, true, 3, 3000);
   check_hold(complex_pole_axis(), true, 4, 1000);
+}
+
+// Plants of the same discretization share their tables of powers, built
+// once: an axis built while others live moves exactly as one built alone,
+// whether its matrices are another's or not.
+TEST(SimPlant, PlantsAliveTogetherMoveAsPlantsAlone) {
+  const auto trajectory = [](AxisPlant& p) {
+    std::vector<double> x;
+    for (int k = 0; k < 6000; ++k) {
+      p.step(k < 3000 ? 9.0 : -4.5);
+      if (k % 7 == 0) x.insert(x.end(), {p.current_a(), p.speed_rad_s(), p.position_rad()});
+    }
+    return x;
+  };
+  AxisConfig z = default_x();
+  z.load_force_n = 60;
+  const std::vector<AxisConfig> cfgs = {default_x(), complex_pole_axis(), z, default_x()};
+  std::vector<std::vector<double>> alone;
+  for (const AxisConfig& c : cfgs) {
+    AxisPlant p(c, 1e-6);
+    alone.push_back(trajectory(p));
+  }
+  std::vector<AxisPlant> together;
+  for (const AxisConfig& c : cfgs) together.emplace_back(c, 1e-6);
+  together.emplace_back(default_x(), 2e-6);  // another step: other tables
+  for (size_t i = 0; i < cfgs.size(); ++i) EXPECT_EQ(trajectory(together[i]), alone[i]) << "axis " << i;
+  // The different ones do move differently (the check can fail).
+  EXPECT_NE(alone[0], alone[1]);
+  EXPECT_NE(alone[0], alone[2]);
+  AxisPlant slow(default_x(), 2e-6);
+  EXPECT_EQ(trajectory(together.back()), trajectory(slow));
 }
 
 // The per-step cost, printed for docs/plant.md; not asserted (speed is never

@@ -349,12 +349,15 @@ class Machine {
     start_step_ = uint64_t(std::llround(1e-3 / m.plant_dt_s));  // the command starts at 1 ms
     end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
     record_every_ = std::max<uint64_t>(1, uint64_t(std::llround(s_.record_dt_s / m.plant_dt_s)));
-    // The trace's length is known: no copies while it grows.
-    const size_t records = size_t((end_step_ - start_step_) / record_every_ + 1);
-    res_.t.reserve(records);
+    // The trace's length is known, and so are its times: the records are
+    // written in place (record_metres, and jump()'s holds the positions).
+    records_ = size_t((end_step_ - start_step_) / record_every_);
+    res_.t.resize(records_);
+    for (size_t i = 0; i < records_; ++i) res_.t[i] = double(uint64_t(i + 1) * record_every_) * dt_;
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].reserve(records);
-      res_.pos_m[size_t(a)].reserve(records);
+      res_.cmd_m[size_t(a)].resize(records_);
+      res_.pos_m[size_t(a)].resize(records_);
+      if (job_) enc_[size_t(a)].resize(records_);
     }
     if (s_.platform.host) {
       for (int a = 0; a < kCoreAxes; ++a) {
@@ -414,6 +417,9 @@ class Machine {
   }
 
   RunResult finish(double wall_s) {
+    if (rec_ != records_)
+      throw std::logic_error("co-simulation: " + std::to_string(rec_) + " records of " +
+                             std::to_string(records_));
     res_.sim_s = double(end_step_ - start_step_) * dt();
     res_.wall_s = wall_s;
     for (int a = 0; a < kCoreAxes; ++a)
@@ -545,8 +551,8 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       count0[a] = plant_[size_t(a)].encoder_count();
       ahead_[size_t(a)].take_motion(plant_[size_t(a)]);
-      sampled_[a].clear();
-      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, first, &sampled_[a], counts_[a]);
+      AxisPlant::Samples at{first, record_every_, res_.pos_m[size_t(a)].data() + rec_, records_ - rec_};
+      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, at, counts_[a]);
       most = std::min(most, ahead_steps_[a]);
     }
     // The edges: a count reached at the end of step s shows from clock
@@ -564,29 +570,30 @@ class Machine {
     for (int a = 0; a < kCoreAxes && whole > 0; ++a) {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)].take_motion(ahead_[size_t(a)]);
-      else if (hold_counting(plant_[size_t(a)], a, sk, whole, whole + 1, nullptr, recount_) != whole)
+      else if (AxisPlant::Samples none;
+               hold_counting(plant_[size_t(a)], a, sk, whole, none, recount_) != whole)
         throw std::logic_error("co-simulation: a plant held again took other steps");
     }
-    // The records: a step's command is the one its last clock showed, after
-    // all its edges but the last; its count, the last the axis reached.
+    // The records (their positions the holds wrote): a step's command is
+    // the one its last clock showed, after all its edges but the last; its
+    // count, the last the axis reached.
     size_t mv = 0, cn[kCoreAxes] = {};
     double cmd_m[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
-    for (uint64_t j = first, i = 0; j <= whole; j += record_every_, ++i) {
+    double* cmd_out[kCoreAxes] = {res_.cmd_m[0].data(), res_.cmd_m[1].data()};
+    for (uint64_t j = first; j <= whole; j += record_every_, ++rec_) {
       if (mv < moves_.size() && moves_[mv].clock <= j * k_ - 1) {
         for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
           for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
         for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
       }
-      const double pos[kCoreAxes] = {sampled_[0][i], sampled_[1][i]};
-      int64_t count[kCoreAxes] = {};
+      for (int a = 0; a < kCoreAxes; ++a) cmd_out[a][rec_] = cmd_m[a];
       if (job_)
         for (int a = 0; a < kCoreAxes; ++a) {
           const std::vector<StepCount>& c = counts_[size_t(a)];
           while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
-          count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
+          enc_[size_t(a)][rec_] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
         }
-      record_metres(step_ + j, cmd_m, pos, count);
     }
     step_ += whole;
     for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = core_->cmd(a);
@@ -665,8 +672,8 @@ class Machine {
   // StepVolts), up to n or the first that changes the count; positions
   // sampled after steps first, first + record_every_, ... into *out.
   // Returns the last step taken.
-  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n, uint64_t first,
-                       std::vector<double>* out) {
+  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n,
+                       AxisPlant::Samples& out) {
     const DriveSteps& ds = sk.drive[a];
     const int64_t count = p.encoder_count();
     uint64_t s = s0;
@@ -688,8 +695,11 @@ class Machine {
         len = std::min(n, next / k_) - s;
       }
       // The records in this piece, counted from its start.
-      const uint64_t rel = first > s ? first - s : record_every_ - (s - first) % record_every_;
-      const uint64_t t = p.hold(v, len, {rel, record_every_, out});
+      AxisPlant::Samples piece = out;
+      piece.first = out.first > s ? out.first - s : record_every_ - (s - out.first) % record_every_;
+      const uint64_t t = p.hold(v, len, piece);
+      out.out = piece.out;
+      out.room = piece.room;
       s += t;
       // hold() counts from its own start: a piece that ends on the change
       // takes all its steps.
@@ -701,13 +711,13 @@ class Machine {
   // Up to n steps of hold_driven(), through the count changes: each count
   // reached goes in *counts with its step. Ends at n or after a step that
   // brings more than one new count. Returns the last step taken.
-  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
-                         std::vector<double>* out, std::vector<StepCount>& counts) {
+  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, AxisPlant::Samples out,
+                         std::vector<StepCount>& counts) {
     counts.clear();
     uint64_t s = 0;
     while (s < n) {
       const int64_t before = p.encoder_count();
-      s = hold_driven(p, a, sk, s, n, first, out);
+      s = hold_driven(p, a, sk, s, n, out);
       const int64_t now = p.encoder_count();
       if (now == before) break;
       counts.push_back(StepCount{s, now});
@@ -967,13 +977,14 @@ class Machine {
     record_metres(step, cmd_m, pos_m, count);
   }
   void record_metres(uint64_t step, const double* cmd_m, const double* pos_m, const int64_t* count) {
-    res_.t.push_back(double(step - start_step_) * dt_);
+    if (rec_ >= records_ || step - start_step_ != (rec_ + 1) * record_every_)
+      throw std::logic_error("co-simulation: a record at step " + std::to_string(step) + " out of turn");
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].push_back(cmd_m[a]);
-      res_.pos_m[size_t(a)].push_back(pos_m[a]);
+      res_.cmd_m[size_t(a)][rec_] = cmd_m[a];
+      res_.pos_m[size_t(a)][rec_] = pos_m[a];
+      if (job_) enc_[size_t(a)][rec_] = count[a];
     }
-    if (job_)
-      for (int a = 0; a < kCoreAxes; ++a) enc_[size_t(a)].push_back(count[a]);
+    ++rec_;
   }
 
   const RunSpec& s_;
@@ -987,7 +998,6 @@ class Machine {
   std::vector<AxisPlant> plant_;
   std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead
   uint64_t ahead_steps_[kCoreAxes] = {};
-  std::vector<double> sampled_[kCoreAxes];              // jump(): their positions at the records
   std::vector<StepCount> counts_[kCoreAxes], recount_;  // jump(): the counts they reached
   // jump(): the edges to show the core, in clocks from the jump's start.
   struct Edge {
@@ -1005,6 +1015,7 @@ class Machine {
   uint64_t gen_clock_ = 0;  // clocks gen_ has run
   CoreIn in_;
   uint64_t step_ = 0, start_step_ = 0, end_step_ = 0, record_every_ = 1;
+  size_t records_ = 0, rec_ = 0;  // the trace's records, and the next to write
   int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
   uint64_t done_clock_ = 0;
   double volts_v_[kCoreAxes] = {};  // clock_volts' last drive value's volts

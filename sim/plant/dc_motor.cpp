@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <stdexcept>
 
 #include "host/base/errors.hpp"
 
@@ -50,7 +52,37 @@ AxisPlant::AxisPlant(const AxisConfig& cfg, double dt_s) : m_(cfg.motor), dt_(dt
   stuck_a_ = std::exp(-m_.r_ohm / m_.l_h * dt_s);
   stuck_b_ = -std::expm1(-m_.r_ohm / m_.l_h * dt_s) / m_.r_ohm;
 
+  pw_ = powers_for(ad_, bd_, stuck_a_, stuck_b_);
+  // The speed under a held input is a constant plus two exponentials of the
+  // electromechanical poles; with real poles its derivative has at most one
+  // zero, which is what hold()'s search needs (complex poles: step by step).
+  const double tr = m_.r_ohm / m_.l_h + m_.b_nm_s_per_rad / j_;
+  const double det = (m_.r_ohm * m_.b_nm_s_per_rad + m_.ke_v_s_per_rad * m_.kt_nm_per_a) / (m_.l_h * j_);
+  monotone_runs_ = tr * tr - 4 * det >= 0;
+}
+
+std::shared_ptr<const AxisPlant::Powers> AxisPlant::powers_for(const Eigen::Matrix3d& ad_1,
+                                                               const Eigen::Matrix<double, 3, 2>& bd_1,
+                                                               double stuck_a, double stuck_b) {
+  // Axes of one machine are often alike, and a machine is built again for
+  // every run: the tables of a discretization already built are shared
+  // while a plant holds them (the key is the exact one-step matrices).
+  static std::mutex mu;
+  static std::vector<std::weak_ptr<const Powers>> built;
+  const std::lock_guard<std::mutex> lock(mu);
+  for (auto it = built.begin(); it != built.end();) {
+    if (const std::shared_ptr<const Powers> p = it->lock()) {
+      if (p->ad_1 == ad_1 && p->bd_1 == bd_1 && p->stuck_a_1 == stuck_a && p->stuck_b_1 == stuck_b) return p;
+      ++it;
+    } else {
+      it = built.erase(it);
+    }
+  }
   auto pw = std::make_shared<Powers>();
+  pw->ad_1 = ad_1;
+  pw->bd_1 = bd_1;
+  pw->stuck_a_1 = stuck_a;
+  pw->stuck_b_1 = stuck_b;
   pw->k.resize(kRun + 1);
   pw->stuck_a.resize(kRun + 1);
   pw->stuck_b.resize(kRun + 1);
@@ -65,18 +97,13 @@ AxisPlant::AxisPlant(const AxisConfig& cfg, double dt_s) : m_(cfg.motor), dt_(dt
       for (int j = 0; j < 2; ++j) p.bd[i][j] = bd(i, j);
     }
     if (k == kRun) break;
-    bd = bd + ad * bd_;
-    ad = ad_ * ad;
-    pw->stuck_a[k + 1] = stuck_a_ * pw->stuck_a[k];
-    pw->stuck_b[k + 1] = pw->stuck_b[k] + pw->stuck_a[k] * stuck_b_;
+    bd = bd + ad * bd_1;
+    ad = ad_1 * ad;
+    pw->stuck_a[k + 1] = stuck_a * pw->stuck_a[k];
+    pw->stuck_b[k + 1] = pw->stuck_b[k] + pw->stuck_a[k] * stuck_b;
   }
-  pw_ = std::move(pw);
-  // The speed under a held input is a constant plus two exponentials of the
-  // electromechanical poles; with real poles its derivative has at most one
-  // zero, which is what hold()'s search needs (complex poles: step by step).
-  const double tr = m_.r_ohm / m_.l_h + m_.b_nm_s_per_rad / j_;
-  const double det = (m_.r_ohm * m_.b_nm_s_per_rad + m_.ke_v_s_per_rad * m_.kt_nm_per_a) / (m_.l_h * j_);
-  monotone_runs_ = tr * tr - 4 * det >= 0;
+  built.push_back(pw);
+  return pw;
 }
 
 void AxisPlant::anchor(double v, double dir) {
@@ -116,13 +143,19 @@ void AxisPlant::step(double v) {
 }
 
 uint64_t AxisPlant::hold(double v, uint64_t n) {
-  return hold(v, n, Samples{n + 1, 1, nullptr});
+  Samples none;
+  return hold(v, n, none);
 }
 
-uint64_t AxisPlant::hold(double v, uint64_t n, const Samples& samples) {
+uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
   const int64_t count = encoder_count();
   uint64_t taken = 0;
   uint64_t next = samples.out ? samples.first : n + 1;  // the next sampled step of the call
+  const auto sample = [&](double position_m) {
+    if (samples.room == 0) throw std::logic_error("plant hold: more samples than room for them");
+    *samples.out++ = position_m;
+    --samples.room;
+  };
   while (taken < n) {
     if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun) {
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
@@ -132,7 +165,7 @@ uint64_t AxisPlant::hold(double v, uint64_t n, const Samples& samples) {
         // Samples inside the quiet stretch, from the run (a stuck shaft
         // stands where it is).
         for (; next <= taken + quiet; next += samples.every)
-          samples.out->push_back(stuck ? position_m() : run_x(uint32_t(k_ + (next - taken)), 2) * rad_to_m_);
+          sample(stuck ? position_m() : run_x(uint32_t(k_ + (next - taken)), 2) * rad_to_m_);
         k_ += quiet;
         steps_ += quiet;
         taken += quiet;
@@ -147,7 +180,7 @@ uint64_t AxisPlant::hold(double v, uint64_t n, const Samples& samples) {
     step(v);
     ++taken;
     if (next == taken) {
-      samples.out->push_back(position_m());
+      sample(position_m());
       next += samples.every;
     }
     if (encoder_count() != count) return taken;

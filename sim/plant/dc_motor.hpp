@@ -46,15 +46,17 @@ class AxisPlant {
   // stopping after the first step at whose end the encoder count differs
   // from the count before the call. Returns the steps taken.
   uint64_t hold(double terminal_volts, uint64_t n);
-  // The same, also appending to *out the table position (position_m())
-  // after each of the steps first, first + every, ... of the call (counted
-  // from 1) that it takes: a trace sampled along a held stretch without
-  // ending it.
+  // The same, also writing the table position (position_m()) after each
+  // of the steps first, first + every, ... of the call (counted from 1)
+  // that it takes to out[0], out[1], ... (out then points past the last;
+  // room counts down; no out: none): a trace sampled along a held stretch
+  // without ending it.
   struct Samples {
     uint64_t first = 1, every = 1;
-    std::vector<double>* out = nullptr;
+    double* out = nullptr;
+    size_t room = 0;
   };
-  uint64_t hold(double terminal_volts, uint64_t n, const Samples& samples);
+  uint64_t hold(double terminal_volts, uint64_t n, Samples& samples);
   // The motion of o, a copy of this plant (the same axis): its state, run
   // and friction, for much less than a copy of the whole model.
   void take_motion(const AxisPlant& o) {
@@ -111,15 +113,22 @@ class AxisPlant {
   static constexpr uint32_t kRun = 2048;
   // Ad^k and the sum of Ad^j Bd for j < k, k = 0..kRun, row by row (the
   // searches read one state at a time); the stuck current's a^k and b (1 +
-  // a + .. + a^(k-1)). Shared by copies.
+  // a + .. + a^(k-1)). Shared by copies, and by plants of the same one-step
+  // matrices (powers_for).
   struct Power {
     double ad[3][3];
     double bd[3][2];
   };
   struct Powers {
+    Eigen::Matrix3d ad_1;
+    Eigen::Matrix<double, 3, 2> bd_1;
+    double stuck_a_1, stuck_b_1;
     std::vector<Power> k;
     std::vector<double> stuck_a, stuck_b;
   };
+  static std::shared_ptr<const Powers> powers_for(const Eigen::Matrix3d& ad_1,
+                                                  const Eigen::Matrix<double, 3, 2>& bd_1, double stuck_a,
+                                                  double stuck_b);
   // A new run from the current state with this input; the shaft moves in
   // direction dir (friction), or is stuck.
   void anchor(double volts, double dir);
