@@ -443,6 +443,7 @@ TEST(SimPlant, PlantsAliveTogetherMoveAsPlantsAlone) {
     alone.push_back(trajectory(p));
   }
   std::vector<AxisPlant> together;
+  together.reserve(cfgs.size() + 1);
   for (const AxisConfig& c : cfgs) together.emplace_back(c, 1e-6);
   together.emplace_back(default_x(), 2e-6);  // another step: other tables
   for (size_t i = 0; i < cfgs.size(); ++i) EXPECT_EQ(trajectory(together[i]), alone[i]) << "axis " << i;

@@ -670,8 +670,9 @@ class Machine {
   // Steps s0 + 1 .. n (from 1) of a skip that sk.drive describes, as the
   // clock path takes them (each step on the mean of its clocks' volts,
   // StepVolts), up to n or the first that changes the count; positions
-  // sampled after steps first, first + record_every_, ... into *out.
-  // Returns the last step taken.
+  // sampled after steps out.first, out.first + record_every_, ... (counted
+  // from step 1 of the skip) written through out, which moves on past
+  // them. Returns the last step taken.
   uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n,
                        AxisPlant::Samples& out) {
     const DriveSteps& ds = sk.drive[a];
@@ -1201,9 +1202,11 @@ RunResult run(const RunSpec& spec) {
   SystemModel model("system", machine, spec);
   sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
   sc_core::sc_start();
+  // Both clocks stop here, before finish() computes the result's metrics.
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double cpu = process_cpu_s() - cpu0;
   RunResult r = machine.finish(wall);
-  r.cpu_s = process_cpu_s() - cpu0;
+  r.cpu_s = cpu;
   return r;
 }
 

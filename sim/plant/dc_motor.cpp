@@ -71,7 +71,7 @@ std::shared_ptr<const AxisPlant::Powers> AxisPlant::powers_for(const Eigen::Matr
   static std::vector<std::weak_ptr<const Powers>> built;
   const std::lock_guard<std::mutex> lock(mu);
   for (auto it = built.begin(); it != built.end();) {
-    if (const std::shared_ptr<const Powers> p = it->lock()) {
+    if (std::shared_ptr<const Powers> p = it->lock()) {
       if (p->ad_1 == ad_1 && p->bd_1 == bd_1 && p->stuck_a_1 == stuck_a && p->stuck_b_1 == stuck_b) return p;
       ++it;
     } else {
