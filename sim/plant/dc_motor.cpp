@@ -45,14 +45,10 @@ AxisPlant::AxisPlant(const AxisConfig& cfg, double dt_s) : m_(cfg.motor), dt_(dt
   mc(0, 3) = 1 / m_.l_h;  // input V
   mc(1, 4) = -1 / j_;     // input tau_ext, opposing +w
   const Eigen::Matrix<double, 5, 5> e = (mc * dt_s).exp();
-  ad_ = e.topLeftCorner<3, 3>();
-  bd_ = e.topRightCorner<3, 2>();
-
-  // With w held at 0 only the electrical equation remains.
-  stuck_a_ = std::exp(-m_.r_ohm / m_.l_h * dt_s);
-  stuck_b_ = -std::expm1(-m_.r_ohm / m_.l_h * dt_s) / m_.r_ohm;
-
-  pw_ = powers_for(ad_, bd_, stuck_a_, stuck_b_);
+  // With w held at 0 only the electrical equation remains: i(k+1) = a i(k)
+  // + b V, a = exp(-R dt/L), b = (1 - a)/R.
+  pw_ = powers_for(e.topLeftCorner<3, 3>(), e.topRightCorner<3, 2>(), std::exp(-m_.r_ohm / m_.l_h * dt_s),
+                   -std::expm1(-m_.r_ohm / m_.l_h * dt_s) / m_.r_ohm);
   // The speed under a held input is a constant plus two exponentials of the
   // electromechanical poles; with real poles its derivative has at most one
   // zero, which is what hold()'s search needs (complex poles: step by step).

@@ -96,8 +96,8 @@ class AxisPlant {
 
   // The ZOH matrices: x(k+1) = Ad x(k) + Bd [V, tau_ext]^T, x = [i, w, theta],
   // tau_ext = friction + load (opposing +w). Exposed for tests and analysis.
-  const Eigen::Matrix3d& ad() const { return ad_; }
-  const Eigen::Matrix<double, 3, 2>& bd() const { return bd_; }
+  const Eigen::Matrix3d& ad() const { return pw_->ad_1; }
+  const Eigen::Matrix<double, 3, 2>& bd() const { return pw_->bd_1; }
 
  private:
   MotorParams m_;
@@ -105,9 +105,6 @@ class AxisPlant {
   double j_;         // total inertia at the motor shaft
   double tau_load_;  // load torque at the motor shaft
   double rad_to_m_, rad_to_count_;
-  Eigen::Matrix3d ad_;
-  Eigen::Matrix<double, 3, 2> bd_;
-  double stuck_a_, stuck_b_;  // i(k+1) = a i(k) + b V with w = 0: exp(-R dt/L), (1 - a)/R
 
   // The longest run: a new anchor is taken every kRun steps.
   static constexpr uint32_t kRun = 2048;
@@ -120,7 +117,7 @@ class AxisPlant {
     double bd[3][2];
   };
   struct Powers {
-    Eigen::Matrix3d ad_1;
+    Eigen::Matrix3d ad_1;  // the one-step matrices (k = 1), also the key
     Eigen::Matrix<double, 3, 2> bd_1;
     double stuck_a_1, stuck_b_1;
     std::vector<Power> k;
