@@ -417,9 +417,7 @@ class Machine {
   }
 
   RunResult finish(double wall_s) {
-    if (rec_ != records_)
-      throw std::logic_error("co-simulation: " + std::to_string(rec_) + " records of " +
-                             std::to_string(records_));
+    check_records(end_step_, 0);
     res_.sim_s = double(end_step_ - start_step_) * dt();
     res_.wall_s = wall_s;
     for (int a = 0; a < kCoreAxes; ++a)
@@ -580,21 +578,22 @@ class Machine {
     size_t mv = 0, cn[kCoreAxes] = {};
     double cmd_m[kCoreAxes];
     for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
-    double* cmd_out[kCoreAxes] = {res_.cmd_m[0].data(), res_.cmd_m[1].data()};
-    for (uint64_t j = first; j <= whole; j += record_every_, ++rec_) {
+    for (uint64_t j = first; j <= whole; j += record_every_) {
       if (mv < moves_.size() && moves_[mv].clock <= j * k_ - 1) {
         for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
           for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
         for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
       }
-      for (int a = 0; a < kCoreAxes; ++a) cmd_out[a][rec_] = cmd_m[a];
+      int64_t count[kCoreAxes] = {};
       if (job_)
         for (int a = 0; a < kCoreAxes; ++a) {
           const std::vector<StepCount>& c = counts_[size_t(a)];
           while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
-          enc_[size_t(a)][rec_] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
+          count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
         }
+      record_command(cmd_m, count);
     }
+    check_records(step_ + whole, 0);
     step_ += whole;
     for (int a = 0; a < kCoreAxes; ++a) cmd_now_[a] = core_->cmd(a);
     if (step_ >= start_step_) feed_.clocked(level, false);
@@ -978,14 +977,26 @@ class Machine {
     record_metres(step, cmd_m, pos_m, count);
   }
   void record_metres(uint64_t step, const double* cmd_m, const double* pos_m, const int64_t* count) {
-    if (rec_ >= records_ || step - start_step_ != (rec_ + 1) * record_every_)
-      throw std::logic_error("co-simulation: a record at step " + std::to_string(step) + " out of turn");
+    check_records(step, 1);
+    for (int a = 0; a < kCoreAxes; ++a) res_.pos_m[size_t(a)][rec_] = pos_m[a];
+    record_command(cmd_m, count);
+  }
+  // The rest of the next record, its positions in place (a jump's holds
+  // wrote them): the command, a job's counts.
+  void record_command(const double* cmd_m, const int64_t* count) {
     for (int a = 0; a < kCoreAxes; ++a) {
       res_.cmd_m[size_t(a)][rec_] = cmd_m[a];
-      res_.pos_m[size_t(a)][rec_] = pos_m[a];
       if (job_) enc_[size_t(a)][rec_] = count[a];
     }
     ++rec_;
+  }
+  // By the end of plant step `step`, the records due are those written and
+  // `coming` more, and the trace has room for them.
+  void check_records(uint64_t step, size_t coming) const {
+    const uint64_t due = step > start_step_ ? (step - start_step_) / record_every_ : 0;
+    if (rec_ + coming != due || due > records_)
+      throw std::logic_error("co-simulation: " + std::to_string(rec_ + coming) + " records by step " +
+                             std::to_string(step) + ", " + std::to_string(due) + " due");
   }
 
   const RunSpec& s_;
@@ -1019,9 +1030,9 @@ class Machine {
   size_t records_ = 0, rec_ = 0;  // the trace's records, and the next to write
   int64_t shown_[kCoreAxes] = {}, emit_from_[kCoreAxes] = {}, emit_n_[kCoreAxes] = {};
   uint64_t done_clock_ = 0;
-  double volts_v_[kCoreAxes] = {};  // clock_volts' last drive value's volts
+  double volts_v_[kCoreAxes] = {};  // averaged_volts(): the volts of volts_u_
   int32_t cmd_now_[kCoreAxes] = {};
-  int16_t volts_u_[kCoreAxes] = {};  // ... and the value
+  int16_t volts_u_[kCoreAxes] = {};  // averaged_volts(): the last drive value converted
   bool volts_set_[kCoreAxes] = {};
   bool pending_ = false;
   RunResult res_;
