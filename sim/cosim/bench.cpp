@@ -656,7 +656,7 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   if (goal_wall > 0)
     md << "\nThe goal's case, the two-axis circle at 100 us on the twin: " << fmt(goal_sim / goal_wall, 1)
        << "x real time on wall time (" << fmt(goal_sim, 2) << " s simulated in " << fmt(goal_wall, 3)
-       << " s, each policy's run beside another job).\n";
+       << " s, the runs " << o.jobs << " at a time).\n";
   md << "\nGoals: the twin co-simulation of the two-axis loop at least 100x real time; the RTL "
         "co-simulation at least 75 % of the speed of the bare Verilated core measured in the same run; the "
         "virtual board (`motionctl sim serve --speed max`, measured in process under a host session) at "
