@@ -549,8 +549,8 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       count0[a] = plant_[size_t(a)].encoder_count();
       ahead_[size_t(a)].take_motion(plant_[size_t(a)]);
-      AxisPlant::Samples at{first, record_every_, res_.pos_m[size_t(a)].data() + rec_, records_ - rec_};
-      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, at, counts_[a]);
+      AxisPlant::Samples at{1, record_every_, res_.pos_m[size_t(a)].data() + rec_, records_ - rec_};
+      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, first, at, counts_[a]);
       most = std::min(most, ahead_steps_[a]);
     }
     // The edges: a count reached at the end of step s shows from clock
@@ -569,7 +569,7 @@ class Machine {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)].take_motion(ahead_[size_t(a)]);
       else if (AxisPlant::Samples none;
-               hold_counting(plant_[size_t(a)], a, sk, whole, none, recount_) != whole)
+               hold_counting(plant_[size_t(a)], a, sk, whole, whole + 1, none, recount_) != whole)
         throw std::logic_error("co-simulation: a plant held again took other steps");
     }
     // The records (their positions the holds wrote): a step's command is
@@ -669,10 +669,9 @@ class Machine {
   // Steps s0 + 1 .. n (from 1) of a skip that sk.drive describes, as the
   // clock path takes them (each step on the mean of its clocks' volts,
   // StepVolts), up to n or the first that changes the count; positions
-  // sampled after steps out.first, out.first + record_every_, ... (counted
-  // from step 1 of the skip) written through out, which moves on past
-  // them. Returns the last step taken.
-  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n,
+  // sampled after steps first, first + record_every_, ... written through
+  // out, which moves on past them. Returns the last step taken.
+  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n, uint64_t first,
                        AxisPlant::Samples& out) {
     const DriveSteps& ds = sk.drive[a];
     const int64_t count = p.encoder_count();
@@ -695,11 +694,8 @@ class Machine {
         len = std::min(n, next / k_) - s;
       }
       // The records in this piece, counted from its start.
-      AxisPlant::Samples piece = out;
-      piece.first = out.first > s ? out.first - s : record_every_ - (s - out.first) % record_every_;
-      const uint64_t t = p.hold(v, len, piece);
-      out.out = piece.out;
-      out.room = piece.room;
+      out.first = first > s ? first - s : record_every_ - (s - first) % record_every_;
+      const uint64_t t = p.hold(v, len, out);
       s += t;
       // hold() counts from its own start: a piece that ends on the change
       // takes all its steps.
@@ -711,13 +707,13 @@ class Machine {
   // Up to n steps of hold_driven(), through the count changes: each count
   // reached goes in *counts with its step. Ends at n or after a step that
   // brings more than one new count. Returns the last step taken.
-  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, AxisPlant::Samples out,
-                         std::vector<StepCount>& counts) {
+  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
+                         AxisPlant::Samples out, std::vector<StepCount>& counts) {
     counts.clear();
     uint64_t s = 0;
     while (s < n) {
       const int64_t before = p.encoder_count();
-      s = hold_driven(p, a, sk, s, n, out);
+      s = hold_driven(p, a, sk, s, n, first, out);
       const int64_t now = p.encoder_count();
       if (now == before) break;
       counts.push_back(StepCount{s, now});
