@@ -328,13 +328,58 @@ class MotionCore {
   // The same after quiet_as(in, .., let), let.busy set.
   template <typename Moved>
   uint32_t skip_busy_as(const In& in, uint32_t n, Let let, Moved&& moved) {
+    return skip_busy_as(in, n, let, moved, nullptr, 0);
+  }
+  // An encoder's pins changing inside a stretch: from its clock-th clock on
+  // (counted from the stretch's first, 0), axis `axis` shows a, b, z.
+  struct PinChange {
+    uint32_t clock;
+    int axis;
+    bool a, b, z;
+  };
+  // Of these changes (in clock order, each at clock 1 or later) inside a
+  // stretch that quiet_as(in, .., let) allowed with let.settle, how many in
+  // a row the stretch may take: each a clean edge of its decoder
+  // (QuadDecoder::clean_edge_from) that finds the decoder settled, on the
+  // pins before it, by its clock. Those settle as any edge does under
+  // let.settle: only the count moves, which the PID reads at a tick. So a
+  // stretch need not end at every count the plant reaches.
+  size_t foldable(const In& in, const PinChange* ch, size_t count) const {
+    // Per axis: the clock from which its decoder is settled, and on which
+    // pins (asked of the decoder at its first change only).
+    uint32_t ready[NAXES], pins[NAXES];
+    bool known[NAXES] = {};
+    for (size_t i = 0; i < count; ++i) {
+      const PinChange& c = ch[i];
+      QuadIn to = quad_in(in, c.axis, false);
+      if (!known[c.axis]) {
+        known[c.axis] = true;
+        ready[c.axis] = dec_[c.axis].settle_clocks(to);
+        pins[c.axis] = Decoder::pins_of(to);
+      }
+      to.a = c.a;
+      to.b = c.b;
+      to.z = c.z;
+      if (ready[c.axis] == Decoder::kUnsettled || c.clock < ready[c.axis] ||
+          !dec_[c.axis].clean_edge_from(pins[c.axis], to))
+        return i;
+      ready[c.axis] = c.clock + Decoder::kEdgeClocks;
+      pins[c.axis] = Decoder::pins_of(to);
+    }
+    return count;
+  }
+  // skip_busy_as() with the pins changing as the first `count` of ch say
+  // (all of them foldable(); those at or past the clocks it does are not
+  // taken).
+  template <typename Moved>
+  uint32_t skip_busy_as(const In& in, uint32_t n, Let let, Moved&& moved, const PinChange* ch, size_t count) {
     if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
       n = ip_.run_for(n, moved);
       if (n == 0) return 0;
     } else {
       skip_interp(n);
     }
-    skip_others(n, &in, let);
+    skip_others(n, &in, let, ch, count);
     return n;
   }
   uint32_t skip_busy(const In& in, uint32_t n) {
@@ -504,17 +549,29 @@ class MotionCore {
       ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
     }
   }
-  // in: the inputs held (needed with let.settle or let.drive).
-  void skip_others(uint32_t n, const In* in, Let let) {
+  // in: the inputs held (needed with let.settle or let.drive), but for the
+  // pins that ch changes (let.settle).
+  void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0) {
     if (let.drive) skip_drive(n, *in);
     // The port reads the published bank, which no skipped clock swaps.
     if (let.sample) r_.smp_rdata = read_bank(in->smp_raddr);
     pid_.skip(n);
     for (int a = 0; a < NAXES; ++a) {
-      if (let.settle)
-        dec_[a].skip_settling(quad_in(*in, a, false), n);
-      else
+      if (let.settle) {
+        QuadIn qi = quad_in(*in, a, false);
+        uint32_t t = 0;
+        for (size_t i = 0; i < count && ch[i].clock < n; ++i) {
+          if (ch[i].axis != a) continue;
+          dec_[a].skip_settling(qi, ch[i].clock - t);
+          t = ch[i].clock;
+          qi.a = ch[i].a;
+          qi.b = ch[i].b;
+          qi.z = ch[i].z;
+        }
+        dec_[a].skip_settling(qi, n - t);
+      } else {
         dec_[a].skip(n);
+      }
       r_.pwm[a] = duty(r_.drv_u[a]) > ((r_.pcnt + n - 1) & pwm_mask);
     }
     r_.pcnt = (r_.pcnt + n) & pwm_mask;

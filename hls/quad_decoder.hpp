@@ -210,8 +210,9 @@ class QuadDecoder {
   // PID's tick, every sample) publishes the velocity and the age as well,
   // and skip_sampled() is that clock, for much less than step().
   bool quiet_but_sample(const QuadIn& in) const {
-    return !in.rst && !in.latch && !(POS_LOAD && in.pos_load) && !in.idx_arm && !in.idx_disarm &&
-           !in.err_clr && pins_of(in) == r_.meta && settled();
+    const bool strobe =
+        in.rst | in.latch | (POS_LOAD & in.pos_load) | in.idx_arm | in.idx_disarm | in.err_clr;
+    return !strobe && pins_of(in) == r_.meta && settled();
   }
   void skip_sampled() {
     r_.vel_o = r_.vel_acc;
@@ -264,6 +265,22 @@ class QuadDecoder {
     if (i < n) skip(n - i);
   }
 
+  // A clean edge from pins `from` to in's, the decoder settled on `from` by
+  // then (as clean_edge() asks of the pins it last saw): what a caller
+  // checks of an edge it wants skip_settling() to take later in a stretch.
+  static constexpr uint32_t kEdgeClocks = 4;
+  bool clean_edge_from(uint32_t from, const QuadIn& in) const {
+    const uint32_t pins = pins_of(in);
+    const uint32_t pass = pins ^ from;
+    const bool strobe =
+        in.rst | in.latch | (POS_LOAD & in.pos_load) | in.idx_arm | in.idx_disarm | in.err_clr;
+    return !strobe && !in.sample && (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
+           !(r_.idx_armed_o && (pass & pins & 4));
+  }
+  static uint32_t pins_of(const QuadIn& in) {
+    return uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+  }
+
   // Single outputs, for users that need a few every clock.
   int32_t pos() const { return int32_t(r_.pos_o); }
   int32_t idx_pos() const { return int32_t(r_.idx_pos_o); }
@@ -302,9 +319,8 @@ class QuadDecoder {
   // clock passes at once, and neither a quadrature error nor an armed index
   // on the way. The settling then always takes the same clocks: two
   // through the synchronizers, the filter's pass, the count (a move's);
-  // settle_edge() is the first four, as step() does them
+  // settle_edge() is the first kEdgeClocks, as step() does them
   // (QuadTwinFastForward holds it to step()).
-  static constexpr uint32_t kEdgeClocks = 4;
   bool clean_edge(const QuadIn& in) const {
     const uint32_t pins = pins_of(in);
     const uint32_t pass = pins ^ r_.meta;
@@ -314,13 +330,13 @@ class QuadDecoder {
   // Everything through the synchronizers and filters on the pins last
   // seen (meta), nothing registered: quiet() with those pins held, strobes
   // aside.
+  // (One OR of differences rather than a chain of tests: a look at the
+  // core asks it of every decoder, and it is nearly always true.)
   bool settled() const {
-    return r_.meta == r_.sync && r_.sync == r_.filt && r_.cnt[0] == 0 && r_.cnt[1] == 0 && r_.cnt[2] == 0 &&
-           r_.oth == other_of(r_.sync) && !r_.step && !r_.qerr && !r_.z_rise &&
-           (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
-  }
-  static uint32_t pins_of(const QuadIn& in) {
-    return uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
+    const uint32_t moving = (r_.meta ^ r_.sync) | (r_.sync ^ r_.filt) | r_.cnt[0] | r_.cnt[1] | r_.cnt[2] |
+                            (r_.oth ^ other_of(r_.sync)) | uint32_t(r_.step) | uint32_t(r_.qerr) |
+                            uint32_t(r_.z_rise);
+    return moving == 0 && (!IDX_RAM || r_.idx_pos_o == r_.idx_mem[r_.idx_w]);
   }
   // A and B swapped: what each channel's "other" register holds.
   static uint32_t other_of(uint32_t ab) { return ((ab & 1) << 1) | ((ab >> 1) & 1); }

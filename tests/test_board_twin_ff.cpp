@@ -317,6 +317,25 @@ TEST(InterpTwinFastForward, MotionCoreSkipsWhileRunning) {
   }
 }
 
+// A running core's queue, fed as the jump tests feed it: random segments
+// planned on as the words run low, a word one clock in eight while the
+// queue has room.
+struct CoreFeed {
+  SegGen& gen;
+  Vec3 at{0, 0, 0};
+  std::vector<uint32_t> words;
+  void word(std::mt19937_64& rng, const Core& core, Core::In& in) {
+    if (words.size() < 40) {
+      const PlannedSegment p = gen.any(at);
+      at = p.end;
+      for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
+    }
+    in.seg_wr = rng() % 8 == 0 && core.interp().count() < 100;
+    in.seg_wdata = in.seg_wr ? words.front() : 0;
+    if (in.seg_wr) words.erase(words.begin());
+  }
+};
+
 // What the co-simulation's jumps rest on, against clock(): from random
 // points of a running core (lines, arcs and dwells streamed in, encoders
 // moving with glitches and index pulses, the drive allowed, overridden or
@@ -337,19 +356,11 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     configure(in, ts, ref);
     in.enc_filt[0] = ts % 4;
     in.enc_filt[1] = 3;
-    Vec3 at{0, 0, 0};
-    std::vector<uint32_t> words;
+    CoreFeed feed{gen, {0, 0, 0}, {}};
     int64_t count[2] = {};
     uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0, agains = 0;
     for (uint64_t clock = 0; clock < 150'000; ++clock) {
-      if (words.size() < 40) {
-        const PlannedSegment p = gen.any(at);
-        at = p.end;
-        for (uint32_t w : seg::pack(p.seg)) words.push_back(w);
-      }
-      in.seg_wr = rng() % 8 == 0 && ref.interp().count() < 100;
-      in.seg_wdata = in.seg_wr ? words.front() : 0;
-      if (in.seg_wr) words.erase(words.begin());
+      feed.word(rng, ref, in);
       if (rng() % 20'000 == 0)
         for (int x = 0; x < 2; ++x) {
           in.drv_allow[x] = rng() % 4 != 0;
@@ -445,6 +456,123 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     EXPECT_GT(changes, 30u);
     EXPECT_GT(samples, 30u);
     EXPECT_GT(agains, 300u);
+  }
+}
+
+// The edges a jump's stretches take in (MotionCore::foldable and the
+// skip_busy_as() that changes pins), against clocking with the pins changing
+// at the same clocks: from random points of a running core, the inputs held
+// as a jump holds them but for counts of one step each, at random clocks
+// (some closer than a decoder settles, with an index now and then, and
+// with the filter on for some Ts, which no fold may take). The whole state
+// and the clocks of done must be clocking's.
+TEST(InterpTwinFastForward, JumpsTakeEdgesAsClocks) {
+  using PinChange = Core::PinChange;
+  const Core::Let all{false, true, true, true, true};
+  for (const uint32_t ts : {52u, 200u, 1207u}) {
+    std::mt19937_64 rng(ts + 1);
+    SegGen gen = core_segments(ts);
+    Core ref;
+    Core::In in;
+    configure(in, ts, ref);
+    in.enc_filt[0] = ts == 200 ? 2 : 1;
+    in.enc_filt[1] = 0;
+    CoreFeed feed{gen, {0, 0, 0}, {}};
+    int64_t count[2] = {};
+    uint64_t jumps = 0, folded = 0, refused = 0;
+    const auto pins = [](Core::In& h, int x, int64_t c) {
+      const int q = int(c & 3);
+      h.enc_a[x] = q == 1 || q == 2;
+      h.enc_b[x] = q >= 2;
+      h.enc_z[x] = c % 64 == 0;
+    };
+    for (uint64_t clock = 0; clock < 100'000; ++clock) {
+      feed.word(rng, ref, in);
+      for (int x = 0; x < 2; ++x) {
+        if (rng() % 400 == 0) count[x] += rng() % 2 ? 1 : -1;
+        pins(in, x, count[x]);
+      }
+      if (rng() % 97 == 0) {
+        Core::In h = in;
+        h.seg_wr = false;
+        h.seg_wdata = 0;
+        const uint32_t n = 1 + uint32_t(rng() % std::min<uint32_t>(ref.known_drive_clocks(), 3000));
+        // The counts: one step of one axis at a clock, 1 to 40 clocks apart.
+        struct Edge {
+          uint32_t clock;
+          int axis;
+          int64_t count;
+        };
+        std::vector<Edge> edges;
+        int64_t c[2] = {count[0], count[1]};
+        for (uint32_t t = 1 + uint32_t(rng() % 40); t < n; t += 1 + uint32_t(rng() % 40)) {
+          const int x = int(rng() % 2);
+          c[x] += rng() % 4 == 0 ? -1 : 1;
+          edges.push_back(Edge{t, x, c[x]});
+        }
+        Core fast = ref, slow = ref;
+        std::vector<uint32_t> fast_done, slow_done;
+        Core::In hf = h;
+        size_t e = 0;
+        uint32_t did = 0;
+        while (did < n) {
+          for (; e < edges.size() && edges[e].clock == did; ++e) pins(hf, edges[e].axis, edges[e].count);
+          const uint32_t q = std::min(n - did, fast.quiet_limit_as(all));
+          if (q > 0 && fast.quiet_as(hf, q, all)) {
+            std::vector<PinChange> ch;
+            for (size_t i = e; i < edges.size() && edges[i].clock < did + q; ++i) {
+              Core::In p = hf;
+              pins(p, edges[i].axis, edges[i].count);
+              ch.push_back(PinChange{edges[i].clock - did, edges[i].axis, p.enc_a[edges[i].axis],
+                                     p.enc_b[edges[i].axis], p.enc_z[edges[i].axis]});
+            }
+            const size_t f = fast.foldable(hf, ch.data(), ch.size());
+            const uint32_t len = f < ch.size() ? ch[f].clock : q;
+            refused += f < ch.size();
+            QuadOut seen[2];
+            for (int x = 0; x < 2; ++x) seen[x] = fast.decoder(x).out();
+            const uint32_t m = fast.skip_busy_as(
+                hf, len, all, [](uint32_t) {}, ch.data(), f);
+            // What a reader sees between ticks stays (Let::settle).
+            for (int x = 0; x < 2; ++x) {
+              const QuadOut o = fast.decoder(x).out();
+              ASSERT_TRUE(o.err == seen[x].err && o.err_cnt == seen[x].err_cnt &&
+                          o.idx_pos == seen[x].idx_pos && o.idx_seen == seen[x].idx_seen)
+                  << "Ts " << ts << ", clock " << clock << "+" << did << ", axis " << x;
+            }
+            did += m;
+            for (; e < edges.size() && edges[e].clock < did; ++e) {
+              pins(hf, edges[e].axis, edges[e].count);
+              ++folded;
+            }
+            if (m > 0) continue;
+          }
+          const bool quiet_one = fast.quiet_limit_as(all) > 0 && fast.quiet_as(hf, 1, all);
+          if (fast.interp().ending() || (!quiet_one && !fast.quiet_but_pid(hf, all))) break;
+          if (fast.pid().done()) fast_done.push_back(did);
+          fast.clock(hf);
+          ++did;
+        }
+        Core::In hs = h;
+        e = 0;
+        for (uint32_t i = 0; i < did; ++i) {
+          for (; e < edges.size() && edges[e].clock == i; ++e) pins(hs, edges[e].axis, edges[e].count);
+          if (slow.pid().done()) slow_done.push_back(i);
+          slow.clock(hs);
+        }
+        ASSERT_TRUE(slow == fast) << "Ts " << ts << ", clock " << clock << ", " << did << " of " << n;
+        ASSERT_EQ(slow_done, fast_done) << "Ts " << ts << ", clock " << clock;
+        ++jumps;
+      }
+      ref.clock(in);
+    }
+    std::printf("Ts %u: %llu jumps, %llu edges taken inside stretches, %llu stretches cut at an edge\n", ts,
+                (unsigned long long)jumps, (unsigned long long)folded, (unsigned long long)refused);
+    EXPECT_GT(jumps, 500u);
+    // Both happen: edges taken in, and stretches cut where one is not
+    // clean (too close to the last, or filtered).
+    EXPECT_GT(folded, 800u) << "Ts " << ts;
+    EXPECT_GT(refused, 30u) << "Ts " << ts;
   }
 }
 

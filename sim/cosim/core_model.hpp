@@ -36,6 +36,8 @@ struct CmdChange {
   uint32_t clock = 0;
   int32_t cmd[kCoreAxes] = {};
 };
+// An encoder's new pins inside a skip (CoreTwin::PinChange).
+using PinChange = CoreTwin::PinChange;
 
 class CoreModel {
  public:
@@ -66,6 +68,15 @@ class CoreModel {
   virtual uint32_t skip(const CoreIn& /*in*/, uint32_t /*n*/, Skipped* /*first*/,
                         std::vector<CmdChange>& /*changes*/) {
     return 0;
+  }
+  // Of these pin changes (in clock order, from clock 1 of a skip from
+  // here with `in` on), how many in a row the skip may take instead of
+  // ending at each (the twin: CoreTwin::foldable)...
+  virtual size_t foldable(const CoreIn& /*in*/, const PinChange* /*ch*/, size_t /*count*/) const { return 0; }
+  // ... and skip() taking them (`count` of them foldable; first: none).
+  virtual uint32_t skip_edges(const CoreIn& in, uint32_t n, std::vector<CmdChange>& changes,
+                              const PinChange* /*ch*/, size_t count) {
+    return count == 0 ? skip(in, n, nullptr, changes) : 0;
   }
   // This clock's outputs, without the edge (the twin).
   virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
@@ -119,17 +130,32 @@ class TwinCore final : public CoreModel {
       first->pwm0 = twin_.pwm_count();
       for (int a = 0; a < kCoreAxes; ++a) first->drive[a] = twin_.drive_steps(in, a);
     }
-    return twin_.skip_busy_as(in, n, let_, [&](uint32_t clock) {
-      CmdChange c;
-      c.clock = clock;
-      for (int a = 0; a < kCoreAxes; ++a) c.cmd[a] = twin_.interp().pos(a);
-      changes.push_back(c);
-    });
+    return twin_.skip_busy_as(in, n, let_, moved_to(changes));
+  }
+  size_t foldable(const CoreIn& in, const PinChange* ch, size_t count) const override {
+    return twin_.foldable(in, ch, count);
+  }
+  uint32_t skip_edges(const CoreIn& in, uint32_t n, std::vector<CmdChange>& changes, const PinChange* ch,
+                      size_t count) override {
+    return twin_.skip_busy_as(in, n, let_, moved_to(changes), ch, count);
   }
   CoreOut peek(const CoreIn& /*in*/) const override { return used_outputs(); }
   int32_t cmd(int a) const override { return twin_.interp().pos(a); }
 
  private:
+  // What a skip tells of each clock that moved the command: the command
+  // after it, appended to *changes.
+  struct MovedTo {
+    const CoreTwin* twin;
+    std::vector<CmdChange>* changes;
+    void operator()(uint32_t clock) const {
+      CmdChange c;
+      c.clock = clock;
+      for (int a = 0; a < kCoreAxes; ++a) c.cmd[a] = twin->interp().pos(a);
+      changes->push_back(c);
+    }
+  };
+  MovedTo moved_to(std::vector<CmdChange>& changes) const { return MovedTo{&twin_, &changes}; }
   // The outputs the co-simulation reads after configuring the core (as
   // the RTL engine fills them), for much less than outputs() gathers.
   CoreOut used_outputs() const {

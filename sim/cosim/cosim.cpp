@@ -513,8 +513,9 @@ class Machine {
   // A step that starts with one new count an axis shows it as fpga_step
   // does, an edge at its clock 0, and the jump goes on: the plants are held
   // through the window first (their drive is known over it), each count
-  // they reach noted with its step, and the core advances to each of those
-  // steps and is shown the edge there. The records inside take the plants'
+  // they reach noted with its step, and the core is shown each as an edge
+  // at that step's clock 0, inside a skip where the decoder takes it
+  // cleanly (advance_core). The records inside take the plants'
   // positions sampled along the holds and the command as the core's moves
   // left it at each. A jump ends after a step that brings more than one
   // new count (fpga_step shows those), inside a step where the core stops
@@ -607,36 +608,52 @@ class Machine {
 
   // Up to n clocks of the core from the start of this step, the pins held
   // but at edges_ (each shown at its clock, as emit_plan() shows it): the
-  // quiet stretches skipped, the clocks of a PID sample cycled (the
-  // sample's output recorded at done, as fpga_step does a clock later).
-  // Ends early before anything else (a segment's end). moves_ gets the
-  // command's changes, counted in clocks from here. Returns the clocks done.
+  // quiet stretches skipped, taking the edges inside them that the
+  // decoders settle cleanly (CoreModel::foldable), the clocks of a PID
+  // sample cycled (the sample's output recorded at done, as fpga_step does
+  // a clock later). Ends early before anything else (a segment's end).
+  // moves_ gets the command's changes, counted in clocks from here.
+  // Returns the clocks done.
   uint64_t advance_core(uint64_t n) {
     moves_.clear();
     const uint64_t at = step_ * k_;
     uint64_t done = 0;
     size_t e = 0;
-    bool again = false;  // the pins as the last look saw them
+    bool again = false;  // the pins as the last look saw them, or moved by edges it allowed
     while (done < n) {
       if (e < edges_.size() && edges_[e].clock == done) {
         again = false;
-        int64_t to[kCoreAxes];
-        for (int a = 0; a < kCoreAxes; ++a) to[a] = shown_[a];
-        for (; e < edges_.size() && edges_[e].clock == done; ++e) to[edges_[e].axis] = edges_[e].count;
-        show(to);
-        set_encoder_pins(0);
+        show_edges(e);
       }
-      const uint64_t until = e < edges_.size() ? std::min<uint64_t>(n, edges_[e].clock) : n;
       bool sample = false;
       const uint32_t q =
-          core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(until - done, 1u << 30)), sample, again);
+          core_->quiet_clocks(in_, uint32_t(std::min<uint64_t>(n - done, 1u << 30)), sample, again);
       again = true;
       if (q > 0) {
+        // The edges inside the stretch, each one count on (show() would
+        // spread more): the stretch ends at the first the core cannot take.
+        pins_.clear();
+        int64_t last[kCoreAxes];
+        for (int a = 0; a < kCoreAxes; ++a) last[a] = shown_[a];
+        for (size_t i = e; i < edges_.size() && edges_[i].clock < done + q; ++i) {
+          const Edge& g = edges_[i];
+          const int64_t d = g.count - last[g.axis];
+          if (d != 1 && d != -1) break;
+          last[g.axis] = g.count;
+          const QuadPins p = quadrature_pins(g.count, s_.machine.axes[size_t(g.axis)].encoder_cpr);
+          pins_.push_back(PinChange{uint32_t(g.clock - done), g.axis, p.a, p.b, p.z});
+        }
+        const size_t fold = pins_.empty() ? 0 : core_->foldable(in_, pins_.data(), pins_.size());
+        uint32_t len = q;
+        if (e + fold < edges_.size() && edges_[e + fold].clock < done + q)
+          len = uint32_t(edges_[e + fold].clock - done);
         const size_t from = moves_.size();
-        const uint32_t m = core_->skip(in_, q, nullptr, moves_);
+        const uint32_t m = core_->skip_edges(in_, len, moves_, pins_.data(), fold);
         for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
         done += m;
         res_.clocks_skipped += m;
+        // The pins as the skip left them.
+        while (e < edges_.size() && edges_[e].clock < done) show_edges(e);
         if (m > 0) continue;
       }
       // A quiet clock the skip stopped before moves the command last, or
@@ -659,6 +676,17 @@ class Machine {
       if (o.done && (at + done) / k_ >= start_step_) record_sample(at + done - 1, core_->peek(in_));
     }
     return done;
+  }
+
+  // Shows the core the counts of edges_[e] and of the others at its clock,
+  // as emit_plan() shows a step's; e moves past them.
+  void show_edges(size_t& e) {
+    int64_t to[kCoreAxes];
+    for (int a = 0; a < kCoreAxes; ++a) to[a] = shown_[a];
+    const uint64_t clock = edges_[e].clock;
+    for (; e < edges_.size() && edges_[e].clock == clock; ++e) to[edges_[e].axis] = edges_[e].count;
+    show(to);
+    set_encoder_pins(0);
   }
 
   // A count an axis reached at the end of a step of a jump (from 1).
@@ -1014,6 +1042,7 @@ class Machine {
     int64_t count;
   };
   std::vector<Edge> edges_;
+  std::vector<PinChange> pins_;   // advance_core(): the edges inside a stretch, as pins
   std::vector<CmdChange> moves_;  // jump(): the command's changes in the skip
   mc::host::PidGains gains_[kCoreAxes];
   std::vector<HostLoop> host_;
