@@ -35,7 +35,8 @@ TEST(Metrics, FollowingErrorOfASinusoid) {
   // The window: half a period of |sin| from t = 0.
   const ErrorStats w = following_error(cmd.t, cmd.y, actual, 0.0, 0.1 - 1e-9);
   EXPECT_EQ(w.n, 1000u);
-  EXPECT_THROW(following_error(cmd.t, cmd.y, {0.0}), std::invalid_argument);
+  const std::vector<double> one{0.0};
+  EXPECT_THROW(following_error(cmd.t, cmd.y, one), std::invalid_argument);
 }
 
 TEST(Metrics, ContourErrorFromLines) {

@@ -199,13 +199,13 @@ TEST(StepMetrics, SamplesBeforeTheStepAreIgnored) {
 }
 
 TEST(StepMetrics, BadInputThrows) {
-  const std::vector<double> t{0, 1, 2}, y{0, 1, 1};
-  EXPECT_THROW(step_metrics(t, {0, 1}, 0, 1, 0), InputError);
+  const std::vector<double> t{0, 1, 2}, y{0, 1, 1}, short_y{0, 1}, back_t{0, 2, 1}, nan_y{0, std::nan(""), 1};
+  EXPECT_THROW(step_metrics(t, short_y, 0, 1, 0), InputError);
   EXPECT_THROW(step_metrics(t, y, 0, 0, 0), InputError);
   EXPECT_THROW(step_metrics(t, y, 0, std::nan(""), 0), InputError);
-  EXPECT_THROW(step_metrics({0, 2, 1}, y, 0, 1, 0), InputError);
+  EXPECT_THROW(step_metrics(back_t, y, 0, 1, 0), InputError);
   EXPECT_THROW(step_metrics(t, y, 0, 1, 1.5), InputError);  // one sample after t0
-  EXPECT_THROW(step_metrics(t, {0, std::nan(""), 1}, 0, 1, 0), InputError);
+  EXPECT_THROW(step_metrics(t, nan_y, 0, 1, 0), InputError);
   EXPECT_THROW(step_metrics(t, y, 0, 1, 0, 0), InputError);
 }
 

@@ -27,8 +27,8 @@ double hypot2(Point2 a, Point2 b) {
 
 }  // namespace
 
-ErrorStats following_error(const std::vector<double>& t, const std::vector<double>& cmd,
-                           const std::vector<double>& actual, double t0, double t1) {
+ErrorStats following_error(std::span<const double> t, std::span<const double> cmd,
+                           std::span<const double> actual, double t0, double t1) {
   if (t.size() != cmd.size() || t.size() != actual.size()) {
     throw std::invalid_argument("following_error: t, cmd and actual differ in length (" +
                                 std::to_string(t.size()) + ", " + std::to_string(cmd.size()) + ", " +

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <span>
 #include <variant>
 #include <vector>
 
@@ -16,8 +17,8 @@ struct ErrorStats {
 
 // Following error of one axis: |cmd - actual| at each sample with t in
 // [t0, t1]. The three vectors have the same length (else std::invalid_argument).
-ErrorStats following_error(const std::vector<double>& t, const std::vector<double>& cmd,
-                           const std::vector<double>& actual,
+ErrorStats following_error(std::span<const double> t, std::span<const double> cmd,
+                           std::span<const double> actual,
                            double t0 = -std::numeric_limits<double>::infinity(),
                            double t1 = std::numeric_limits<double>::infinity());
 

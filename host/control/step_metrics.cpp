@@ -14,7 +14,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // The time at which x first reaches level (x rising through it), linearly
 // interpolated between samples i-1 and i; NaN if it never does. Starts at
 // sample `from`.
-double first_reach(const std::vector<double>& t, const std::vector<double>& x, size_t from, double level) {
+double first_reach(std::span<const double> t, std::span<const double> x, size_t from, double level) {
   if (x[from] >= level) return t[from];
   for (size_t i = from + 1; i < x.size(); ++i) {
     if (x[i] >= level) {
@@ -27,7 +27,7 @@ double first_reach(const std::vector<double>& t, const std::vector<double>& x, s
 
 }  // namespace
 
-StepMetrics step_metrics(const std::vector<double>& t, const std::vector<double>& y, double y0, double step,
+StepMetrics step_metrics(std::span<const double> t, std::span<const double> y, double y0, double step,
                          double t0, double band) {
   if (t.size() != y.size())
     throw InputError("step capture",

@@ -9,6 +9,7 @@
 // at the end of the capture has no settling time.
 #pragma once
 
+#include <span>
 #include <vector>
 
 namespace mc::host {
@@ -27,7 +28,7 @@ struct StepMetrics {
 // t strictly increasing, the same length as y, at least two samples at or
 // after t0; step nonzero (either sign); band a fraction of |S| in (0, 1).
 // Samples before t0 are ignored. Throws InputError otherwise.
-StepMetrics step_metrics(const std::vector<double>& t, const std::vector<double>& y, double y0, double step,
+StepMetrics step_metrics(std::span<const double> t, std::span<const double> y, double y0, double step,
                          double t0, double band = 0.02);
 
 }  // namespace mc::host

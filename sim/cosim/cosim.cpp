@@ -1030,7 +1030,7 @@ class Machine {
   const double dt_ = s_.machine.plant_dt_s;
   Command cmd_;
   SegmentFeed feed_;
-  std::array<std::vector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
+  std::array<TraceVector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
   std::vector<AxisPlant> plant_;
   std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead
   uint64_t ahead_steps_[kCoreAxes] = {};
@@ -1135,8 +1135,8 @@ struct Writer {
     pod(uint64_t(s.size()));
     b += s;
   }
-  template <typename T>
-  void vec(const std::vector<T>& v) {
+  template <typename T, typename A>
+  void vec(const std::vector<T, A>& v) {
     pod(uint64_t(v.size()));
     if (!v.empty()) b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
   }
@@ -1160,8 +1160,8 @@ struct Reader {
     s.assign(b, at, n);
     at += n;
   }
-  template <typename T>
-  void vec(std::vector<T>& v) {
+  template <typename T, typename A>
+  void vec(std::vector<T, A>& v) {
     uint64_t n = 0;
     pod(n);
     need(n * sizeof(T));

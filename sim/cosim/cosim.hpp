@@ -27,6 +27,7 @@
 #include "host/control/step_metrics.hpp"
 #include "host/machine/job.hpp"
 #include "host/machine/machine_config.hpp"
+#include "sim/cosim/zeroed.hpp"
 #include "sim/plant/jitter.hpp"
 
 namespace mc::sim {
@@ -141,8 +142,8 @@ struct RunResult {
   std::string platform, scenario, policy, engine;
   std::string feedforward = "none";  // feedforward_name(); gains.ff1, ff2 say what it applied
   mc::host::PidGains gains;          // axis x's
-  std::vector<double> t;             // s from the command start
-  std::array<std::vector<double>, 2> cmd_m, pos_m;
+  TraceVector<double> t;             // s from the command start
+  std::array<TraceVector<double>, 2> cmd_m, pos_m;
   // Every controller output: the FPGA's per PID sample (clock of its done),
   // the PC's per wake.
   std::vector<uint64_t> sample_clock;
