@@ -210,9 +210,7 @@ class QuadDecoder {
   // PID's tick, every sample) publishes the velocity and the age as well,
   // and skip_sampled() is that clock, for much less than step().
   bool quiet_but_sample(const QuadIn& in) const {
-    const bool strobe =
-        in.rst | in.latch | (POS_LOAD & in.pos_load) | in.idx_arm | in.idx_disarm | in.err_clr;
-    return !strobe && pins_of(in) == r_.meta && settled();
+    return !strobed(in) && pins_of(in) == r_.meta && settled();
   }
   void skip_sampled() {
     r_.vel_o = r_.vel_acc;
@@ -231,9 +229,7 @@ class QuadDecoder {
   static constexpr uint32_t kMaxSettle = (1u << FILT_W) + 8;
   uint32_t settle_clocks(const QuadIn& in) const {
     if (quiet(in)) return 0;
-    if (in.rst || in.latch || (POS_LOAD && in.pos_load) || in.idx_arm || in.idx_disarm || in.err_clr ||
-        in.sample)
-      return kUnsettled;
+    if (strobed(in) || in.sample) return kUnsettled;
     if (clean_edge(in)) {
       // A move or a rising index is registered at the filter's pass and
       // gone a clock later; anything else is over with the pass.
@@ -272,10 +268,13 @@ class QuadDecoder {
   bool clean_edge_from(uint32_t from, const QuadIn& in) const {
     const uint32_t pins = pins_of(in);
     const uint32_t pass = pins ^ from;
-    const bool strobe =
-        in.rst | in.latch | (POS_LOAD & in.pos_load) | in.idx_arm | in.idx_disarm | in.err_clr;
-    return !strobe && !in.sample && (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
+    return !strobed(in) && !in.sample && (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
            !(r_.idx_armed_o && (pass & pins & 4));
+  }
+  // A strobe other than the sample's, or the reset: what no fast-forward
+  // goes through.
+  static bool strobed(const QuadIn& in) {
+    return in.rst | in.latch | (POS_LOAD & in.pos_load) | in.idx_arm | in.idx_disarm | in.err_clr;
   }
   static uint32_t pins_of(const QuadIn& in) {
     return uint32_t(in.a) | uint32_t(in.b) << 1 | uint32_t(in.z) << 2;
