@@ -154,14 +154,7 @@ class InterpCore {
     const bool ld = rv_ && !in.abort;
     const bool drop_n = wi_ == 0 ? DEPTH - count < seg::SEG_WORDS : drop_;
     const bool push = in.wr && !in.abort && !drop_n;
-    // The arc's quadrant and the two moves it allows (towards minus when set).
-    const bool xp = !xn_ && !xz_, yp = !yn_ && !yz_;
-    const bool q1 = ccw_ ? (xp && !yn_) : (!xn_ && yp);
-    const bool q2 = ccw_ ? (!xp && yp) : (xn_ && !yn_);
-    const bool q4 = ccw_ ? (!xn_ && yn_) : (xp && !yp);
-    const bool upper = q1 || q2, right = q1 || q4;
-    const bool mxn = upper == ccw_, myn = right != ccw_;
-    const bool xo = xz_ || (xn_ == mxn);  // the x move is outward
+    const auto [mxn, myn, xo] = quadrant();
     const bool final_q = ncross_ == nq_;
     const int c_addr = movex_ ? 4 : 5;
     const bool xlock = final_q && xeq_, ylock = final_q && yeq_;
@@ -279,17 +272,7 @@ class InterpCore {
         if (!outw_ && zero) ncross_ = (ncross_ + 1) & 7;
       }
       if (u == 13 && go_) {
-        int mv = 0, neg = 0;  // bit a: axis a moves / moves negative
-        if (line) {
-          mv = lmv_;
-          neg = neg_;
-        } else if (arc) {
-          mv = 1 << seg::PLANE_AXES[plane_][movex_ ? 0 : 1];
-          neg = neg_m_ ? mv : 0;
-        }
-        for (int ax = 0; ax < 3; ++ax)
-          if ((mv >> ax) & 1) pos_[ax] = sat32(i128(pos_[ax]) + (((neg >> ax) & 1) ? -1 : 1));
-        go_ = false;
+        move();
       }
       if (u == 5) {
         const bool movex = xlock ? false : (ylock ? true : (sign == xo));
@@ -457,6 +440,8 @@ class InterpCore {
   int32_t pos(int a) const { return pos_[a]; }
   bool busy() const { return st_ != ST_IDLE; }
   int state() const { return st_; }
+  // The PREP step or running tick's step of the current clock.
+  int step() const { return sq_; }
   bool underrun() const { return underrun_; }
   bool ovf() const { return ovf_; }
   int seg_cnt() const { return seg_cnt_; }
@@ -547,6 +532,12 @@ class InterpCore {
         done += m;
         continue;
       }
+      // The rest of a tick at once where it all fits and does not end the
+      // segment: the tick that fires an iteration, and the one after it.
+      if (const uint32_t k = uint32_t(TICK - sq_); n - done >= k && finish_tick(done, moved)) {
+        done += k;
+        continue;
+      }
       // A tick that is not calm stays so to its end: its clocks go in a
       // row, each step's edge compiled in place.
       if (!calm_) {
@@ -562,7 +553,7 @@ class InterpCore {
   // that moves.
   template <int S, typename Moved>
   bool run_step(uint32_t n, uint32_t& done, Moved& moved, bool still_last) {
-    const bool moves = (S < 0 || S == STEP_MOVE) && sq_ == STEP_MOVE && go_;
+    const bool moves = (S < 0 || S == STEP_MOVE) && sq_ == STEP_MOVE && go_ && move_axes().first != 0;
     if (((S < 0 || S == STEP_DECIDE) && ending()) || (still_last && done + 1 == n && moves)) return false;
     if constexpr (S < 0)
       clock_running();
@@ -611,6 +602,154 @@ class InterpCore {
     return go;
   }
 
+  // The axes the going iteration moves at step 13 (bit a), and which of
+  // them towards minus (a dwell's moves none).
+  std::pair<int, int> move_axes() const {
+    if (type_ == seg::T_LINE) return {lmv_, neg_};
+    if (type_ != seg::T_ARC) return {0, 0};
+    const int mv = 1 << seg::PLANE_AXES[plane_][movex_ ? 0 : 1];
+    return {mv, neg_m_ ? mv : 0};
+  }
+  // Step 13 of an iteration: the position moves.
+  void move() {
+    const auto [mv, neg] = move_axes();
+    for (int ax = 0; ax < 3; ++ax)
+      if ((mv >> ax) & 1) pos_[ax] = sat32(int64_t(pos_[ax]) + (((neg >> ax) & 1) ? -1 : 1));
+    go_ = false;
+  }
+  // The arc's quadrant, from the signs of x and y: the directions of the
+  // two moves it allows (towards minus when set), and whether the x move is
+  // outward.
+  struct Quadrant {
+    bool mxn, myn, xo;
+  };
+  Quadrant quadrant() const {
+    const bool xp = !xn_ && !xz_, yp = !yn_ && !yz_;
+    const bool q1 = ccw_ ? (xp && !yn_) : (!xn_ && yp);
+    const bool q2 = ccw_ ? (!xp && yp) : (xn_ && !yn_);
+    const bool q4 = ccw_ ? (!xn_ && yn_) : (xp && !yp);
+    const bool upper = q1 || q2, right = q1 || q4;
+    const bool mxn = upper == ccw_;
+    return {mxn, right != ccw_, xz_ || (xn_ == mxn)};
+  }
+
+ public:
+  // The clocks from step sq_ to the end of a running tick, with no input,
+  // at once: the schedule of the header step by step, each ALU operation
+  // on the words its read ports hold (within a running tick a port always
+  // holds the word it addresses: no step reads a word in the clock it is
+  // written), the flags as the edge sets them. False, and nothing done,
+  // where the tick's step 5 would end the segment. moved(done + i) as
+  // run() calls it, i the clock of the tick that moved the position.
+  // FinishTickEqualsClocks holds it to clock().
+  template <typename Moved>
+  bool finish_tick(uint32_t done, Moved&& moved) {
+    if (st_ != ST_RUN) return false;
+    const int s = sq_;
+    const bool line = type_ == seg::T_LINE, arc = type_ == seg::T_ARC;
+    uint32_t* const v = mem_;
+    if (s <= STEP_DECIDE) {
+      const bool xeq = s <= 3 ? v[4] == v[6] : xeq_, yeq = s <= 4 ? v[5] == v[7] : yeq_;
+      if (!nz_ || (arc && ncross_ == nq_ && xeq && yeq)) return false;
+    }
+    const auto add = [](uint32_t a, uint32_t b, bool neg) { return neg ? a - b : a + b; };
+    // A strobe in a clock of the tick (an iteration fired or going): an
+    // iteration already going stays so to step 13, but for step 5 deciding
+    // anew.
+    bool strobe = tick_strobe_ || (go_ && s != STEP_DECIDE && s != STEP_MOVE);
+    if (s == 0) {
+      const uint64_t sum = uint64_t(v[11]) + v[2];
+      v[11] = uint32_t(sum);
+      carry_ = (sum >> 32) & 1;
+      fen_ = true;
+    }
+    if (s <= 1 && fen_) {
+      constexpr int PHB = 16 - seg::TICK_LOG2;
+      constexpr uint32_t mask_hi = ((1u << 16) - 1) & ~((1u << PHB) - 1);
+      const uint32_t a = v[12], b = v[3], out = a + b + uint32_t(carry_);
+      v[12] = (a & 0xFFFF0000u) | (out & 0xFFFFu & ~mask_hi);
+      if ((((out ^ a ^ b) >> 16) & 1) || (out & mask_hi) != 0) {
+        pend_ = pend_ == 3 ? 3 : pend_ + 1;
+        strobe = true;
+      }
+    }
+    const Quadrant q = quadrant();
+    if (s <= 2) v[15] = add(v[8], v[4], q.mxn);
+    if (s <= 3) xeq_ = v[4] == v[6];
+    if (s <= 4) yeq_ = v[5] == v[7];
+    if (s <= STEP_DECIDE) {
+      const bool sign = add(v[15], v[5], q.myn) >> 31;
+      const bool final_q = ncross_ == nq_;
+      const bool movex = final_q && xeq_ ? false : (final_q && yeq_ ? true : sign == q.xo);
+      movex_ = movex;
+      neg_m_ = movex ? q.mxn : q.myn;
+      outw_ = movex == q.xo;
+      go_ = pend_ != 0;
+      if (go_) {
+        --pend_;
+        strobe = true;
+      }
+    }
+    const bool go = go_;
+    if (s <= 6 && go) {
+      --v[1];
+      nz_ = v[1] != 0;
+    }
+    const int c = movex_ ? 4 : 5;
+    const bool dn = !outw_;
+    if (line) {
+      for (int ax = 0; ax < 3; ++ax) {
+        if (s > 7 + ax) continue;
+        const uint32_t out = v[7 + ax] - v[4 + ax];
+        lmv_ = (lmv_ & ~(1 << ax)) | int(int32_t(out) <= 0) << ax;
+        if (ax == 2) carry_ = carry9_ = v[9] >= v[6];
+        if (go) v[7 + ax] = out;
+      }
+      for (int ax = 0; ax < 3; ++ax)
+        if (s <= 10 + ax && go && ((lmv_ >> ax) & 1)) v[7 + ax] += v[14];
+    } else {
+      if (arc && s <= 7 && go) v[8] = add(v[8], v[c], neg_m_);
+      if (arc && s <= 8 && go) {
+        const uint32_t out = neg_m_ ? v[c] - 1 : v[c] + 1;
+        v[c] = out;
+        (movex_ ? xz_ : yz_) = out == 0;
+        (movex_ ? xn_ : yn_) = out >> 31;
+        if (!outw_ && out == 0) ncross_ = (ncross_ + 1) & 7;
+      }
+      if (s <= 9) {
+        // A dwell adds, as the ALU does with no operation.
+        const bool sub = arc && dn;
+        const uint32_t out = add(v[2], v[9], sub);
+        carry_ = carry9_ = sub ? v[2] >= v[9] : out < v[2];
+        if (arc && go) v[2] = out;
+      }
+      if (arc && s <= 10 && go) v[8] = add(v[8], v[c], neg_m_);
+      if (arc && s <= 11 && go) {
+        const uint32_t out = v[3] + (dn ? ~v[13] : v[13]) + uint32_t(carry_);
+        v[3] = (v[3] & 0xFFFF0000u) | (out & 0xFFFFu);
+      }
+    }
+    const bool moving = go && move_axes().first != 0;
+    if (s <= STEP_MOVE && go) {
+      move();
+    }
+    // The read ports as step 15 addresses them; the calm flags at the
+    // tick's end.
+    ra_ = v[11];
+    rb_ = v[2];
+    ra_addr_ = 11;
+    rb_addr_ = 2;
+    rv_ = false;
+    ridx_ = widx_;
+    sq_ = 0;
+    calm_ = !strobe && pend_ == 0 && !go_ && calm_seen_;
+    calm_seen_ = true;
+    tick_strobe_ = false;
+    if (s <= STEP_MOVE && go && moving) moved(done + uint32_t(STEP_MOVE - s + 1));
+    return true;
+  }
+
+ private:
   // n calm clocks at once, from and to a step other than 1 (skip_run).
   // A calm tick rewrites every word and flag with the value it holds, but
   // for the phase (steps 0 and 1) and the carry (set at steps 0 and 9): so

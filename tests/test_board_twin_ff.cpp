@@ -61,17 +61,31 @@ struct SegFeeder {
   bool more() const { return queued < total || !words.empty(); }
 };
 
+// Segments for a lone interpolator: feeds from lo to hi iterations a
+// clock, lines up to max_line counts, arcs up to max_radius.
+SegGen interp_segments(uint64_t seed, double lo, double hi, int64_t max_line, int64_t max_radius) {
+  SegGen gen(seed);
+  gen.min_rate = lo;
+  gen.max_rate = hi;
+  gen.max_line = max_line;
+  gen.max_radius = max_radius;
+  return gen;
+}
+
+Interp reset_interp() {
+  Interp ip;
+  ip.reset();
+  return ip;
+}
+
 TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
   uint64_t all_skipped = 0, all_clocks = 0;
   for (uint64_t seed : {11, 12, 13, 14}) {
     std::mt19937_64 rng(seed);
-    SegGen gen(seed);
     // Slow feeds as well: long stretches without an iteration are what the
     // fast-forward skips; fast ones reach the rate that fires every tick.
-    gen.min_rate = seed == 14 ? 0.5 : 0.001;
-    gen.max_rate = seed == 14 ? 1.0 : 0.05;
-    gen.max_line = 40;
-    gen.max_radius = 30;
+    SegGen gen =
+        seed == 14 ? interp_segments(seed, 0.5, 1.0, 40, 30) : interp_segments(seed, 0.001, 0.05, 40, 30);
     Interp ref, fast;
     ref.reset();
     fast.reset();
@@ -111,6 +125,78 @@ TEST(InterpTwinFastForward, RunSkipEqualsClocks) {
   EXPECT_GT(all_skipped, all_clocks / 2);
 }
 
+// The rest of a running tick at once (InterpCore::finish_tick) and
+// run_for(), which takes it where a tick fits, against clocking: from every
+// few clocks of random lines, arcs and dwells at slow and fast feeds
+// (iterations pending, a tick firing at every step it can start from),
+// with holds, the whole state, the position and the clocks that moved it
+// must be clocking's. finish_tick() refuses only a tick whose step 5 ends
+// the segment.
+TEST(InterpTwinFastForward, FinishTickEqualsClocks) {
+  uint64_t ticks = 0, moving = 0, refused = 0, runs = 0;
+  uint64_t from_step[Interp::TICK] = {};
+  // The clocks (from 1) of n clocks of `slow` that moved the position.
+  const auto clocked = [](Interp& slow, uint32_t n) {
+    std::vector<uint32_t> moves;
+    for (uint32_t i = 1; i <= n; ++i) {
+      const int32_t before[3] = {slow.pos(0), slow.pos(1), slow.pos(2)};
+      slow.clock(InterpIn{});
+      if (slow.pos(0) != before[0] || slow.pos(1) != before[1] || slow.pos(2) != before[2])
+        moves.push_back(i);
+    }
+    return moves;
+  };
+  for (uint64_t seed : {41, 42, 43}) {
+    std::mt19937_64 rng(seed);
+    SegGen gen =
+        seed == 43 ? interp_segments(seed, 0.5, 1.0, 60, 40) : interp_segments(seed, 0.01, 0.3, 60, 40);
+    Interp ip = reset_interp();
+    SegFeeder feeder(gen, 50, 6);
+    uint64_t clock = 0;
+    while (feeder.more() || ip.busy() || ip.count() > 0) {
+      InterpIn in;
+      feeder.feed(rng, ip.count(), in);
+      in.hold = rng() % 3000 == 0;
+      if (in == InterpIn{} && ip.state() == Interp::ST_RUN && rng() % 3 == 0) {
+        const int step = ip.step();
+        Interp fast = ip, slow = ip;
+        std::vector<uint32_t> moves;
+        const auto note = [&](uint32_t i) { moves.push_back(i); };
+        if (fast.finish_tick(0, note)) {
+          ASSERT_EQ(clocked(slow, uint32_t(Interp::TICK - step)), moves)
+              << "seed " << seed << ", clock " << clock;
+          ASSERT_TRUE(slow == fast) << "seed " << seed << ", clock " << clock << ", from step " << step;
+          ++ticks;
+          ++from_step[step];
+          moving += !moves.empty();
+        } else {
+          ASSERT_TRUE(fast == ip) << "seed " << seed << ", clock " << clock << ": refused, yet changed";
+          ASSERT_LE(step, Interp::STEP_DECIDE);
+          clocked(slow, uint32_t(Interp::STEP_DECIDE - step));
+          ASSERT_TRUE(slow.ending()) << "seed " << seed << ", clock " << clock
+                                     << ": refused a tick that goes on";
+          ++refused;
+        }
+        Interp fast2 = ip, slow2 = ip;
+        moves.clear();
+        const uint32_t did = fast2.run_for(1 + uint32_t(rng() % 200), note);
+        ASSERT_EQ(clocked(slow2, did), moves) << "seed " << seed << ", clock " << clock;
+        ASSERT_TRUE(slow2 == fast2) << "seed " << seed << ", clock " << clock << ", run_for " << did;
+        ++runs;
+      }
+      ip.clock(in);
+      ++clock;
+      ASSERT_LT(clock, 100'000'000u) << "seed " << seed << ": the segments never finished";
+    }
+  }
+  std::printf("%llu ticks finished at once (%llu moving), %llu refused at their end, %llu run_for\n",
+              (unsigned long long)ticks, (unsigned long long)moving, (unsigned long long)refused,
+              (unsigned long long)runs);
+  for (int s = 0; s < Interp::TICK; ++s) EXPECT_GT(from_step[s], 50u) << "from step " << s;
+  EXPECT_GT(moving, 1000u);
+  EXPECT_GT(refused, 20u);
+}
+
 // end_bound() is a lower bound: no running segment ends sooner than it said
 // at any clock of its run. Lines and arcs (full circles among them, whose
 // end point is the start), fast feeds (an iteration every tick, pending
@@ -120,13 +206,9 @@ TEST(InterpTwinFastForward, EndBoundIsALowerBound) {
   uint64_t clocks_bounded = 0, clocks_run = 0;
   for (uint64_t seed : {31, 32, 33}) {
     std::mt19937_64 rng(seed);
-    SegGen gen(seed);
-    gen.min_rate = seed == 33 ? 0.7 : 0.02;
-    gen.max_rate = seed == 33 ? 1.0 : 0.5;
-    gen.max_line = 200;
-    gen.max_radius = 60;
-    Interp ip;
-    ip.reset();
+    SegGen gen =
+        seed == 33 ? interp_segments(seed, 0.7, 1.0, 200, 60) : interp_segments(seed, 0.02, 0.5, 200, 60);
+    Interp ip = reset_interp();
     SegFeeder feeder(gen, 80, 4, true);
     int ended = 0;
     uint64_t clock = 0, latest = 0;  // latest: the latest clock a bound so far allowed the end at
