@@ -538,68 +538,22 @@ class InterpCore {
         done += k;
         continue;
       }
-      // A tick that is not calm stays so to its end: its clocks go in a
-      // row, each step's edge compiled in place.
-      if (!calm_) {
-        if (!run_tick(n, done, moved, still_last, std::make_index_sequence<TICK>{})) break;
-        continue;
-      }
-      if (!run_step<-1>(n, done, moved, still_last)) break;
+      // Else (a tick cut short by n, or one that ends the segment) clock by
+      // clock.
+      if (!run_step(n, done, moved, still_last)) break;
     }
     return done;
   }
-  // One clock of run() at tick step S (-1: sq_): false, and not done, when
-  // it is the one that would end the segment or, still_last, a last clock
-  // that moves.
-  template <int S, typename Moved>
+  // One clock of run(): false, and not done, when it is the one that would
+  // end the segment or, still_last, a last clock that moves.
+  template <typename Moved>
   bool run_step(uint32_t n, uint32_t& done, Moved& moved, bool still_last) {
-    const bool moves = (S < 0 || S == STEP_MOVE) && sq_ == STEP_MOVE && go_ && move_axes().first != 0;
-    if (((S < 0 || S == STEP_DECIDE) && ending()) || (still_last && done + 1 == n && moves)) return false;
-    if constexpr (S < 0)
-      clock_running();
-    else if (idle_step<S>())
-      pass_step<S>();
-    else
-      clock_as<true, S>(kNone);
+    const bool moves = sq_ == STEP_MOVE && go_ && move_axes().first != 0;
+    if (ending() || (still_last && done + 1 == n && moves)) return false;
+    clock_running();
     ++done;
     if (moves) moved(done);
     return true;
-  }
-  // With no iteration going, a running tick's step S writes nothing and
-  // sets no flag: 6 and 10 to 15 (their writes wait for the iteration),
-  // and 7 and 8 but on a line (which notes there which axes step).
-  // pass_step() is that clock: the step counter, the read ports as it
-  // addresses them, and at the tick's end the calm flags, as the edge sets
-  // them (RunSkipEqualsClocks and the motion-core twin tests hold it to
-  // clock()).
-  template <int S>
-  bool idle_step() const {
-    return !go_ && (S == 6 || S >= 10 || ((S == 7 || S == 8) && type_ != seg::T_LINE));
-  }
-  template <int S>
-  void pass_step() {
-    const Addr next = next_addr(ST_RUN, S, movex_ ? 4 : 5);
-    ra_ = mem_[next.a];
-    rb_ = mem_[next.b];
-    ra_addr_ = uint8_t(next.a);
-    rb_addr_ = uint8_t(next.b);
-    rv_ = false;
-    ridx_ = widx_;
-    sq_ = (S + 1) & (TICK - 1);
-    if (sq_ == 0) {
-      calm_ = !tick_strobe_ && pend_ == 0 && calm_seen_;
-      calm_seen_ = true;
-      tick_strobe_ = false;
-    }
-  }
-  // The clocks from step sq_ to the tick's end, up to n in all: false where
-  // run_step() stops.
-  template <typename Moved, size_t... S>
-  bool run_tick(uint32_t n, uint32_t& done, Moved& moved, bool still_last, std::index_sequence<S...>) {
-    const int from = sq_;
-    bool go = true;
-    ((go = go && (int(S) < from || done == n || run_step<int(S)>(n, done, moved, still_last))), ...);
-    return go;
   }
 
   // The axes the going iteration moves at step 13 (bit a), and which of

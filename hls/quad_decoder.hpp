@@ -266,10 +266,7 @@ class QuadDecoder {
   // checks of an edge it wants skip_settling() to take later in a stretch.
   static constexpr uint32_t kEdgeClocks = 4;
   bool clean_edge_from(uint32_t from, const QuadIn& in) const {
-    const uint32_t pins = pins_of(in);
-    const uint32_t pass = pins ^ from;
-    return !strobed(in) && !in.sample && (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
-           !(r_.idx_armed_o && (pass & pins & 4));
+    return !strobed(in) && !in.sample && clean_pass(from, in);
   }
   // A strobe other than the sample's, or the reset: what no fast-forward
   // goes through.
@@ -320,11 +317,14 @@ class QuadDecoder {
   // through the synchronizers, the filter's pass, the count (a move's);
   // settle_edge() is the first kEdgeClocks, as step() does them
   // (QuadTwinFastForward holds it to step()).
-  bool clean_edge(const QuadIn& in) const {
+  bool clean_edge(const QuadIn& in) const { return clean_pass(r_.meta, in) && settled(); }
+  // in's pins after `from`: one of A and B moving, or the index, through a
+  // filter of at most one clock, and no armed index hit.
+  bool clean_pass(uint32_t from, const QuadIn& in) const {
     const uint32_t pins = pins_of(in);
-    const uint32_t pass = pins ^ r_.meta;
+    const uint32_t pass = pins ^ from;
     return (in.filt_len & ones(FILT_W)) <= 1 && pass != 0 && (pass & 3) != 3 &&
-           !(r_.idx_armed_o && (pass & pins & 4)) && settled();
+           !(r_.idx_armed_o && (pass & pins & 4));
   }
   // Everything through the synchronizers and filters on the pins last
   // seen (meta), nothing registered: quiet() with those pins held, strobes

@@ -4,7 +4,9 @@
 // takes large blocks as fresh anonymous pages, which the kernel zeroes and
 // (MAP_POPULATE) maps in one call rather than one page fault at a time, so
 // value-initializing an element writes nothing. Small blocks come from
-// std::allocator, zeroed.
+// std::allocator, zeroed. So a column is sized once: grown again after
+// shrinking (resize() after a smaller resize() or clear()), it would show
+// the old values where zeros belong.
 #pragma once
 
 #include <sys/mman.h>
