@@ -543,7 +543,9 @@ class McRegs {
       if (wwr) n.w_ptr = uint8_t((o.w_ptr + 1) & 0xF);
       if (o.w_end) {
         n.w_tlm_busy = false;
-        n.tlm_n = uint8_t((o.w_ptr - 1) & 0xF);
+        // Only a walk that wrote telemetry: its frame may still wait behind
+        // a reply when the next sample's walk ends (Ts under a reply's time).
+        if (o.w_tlm_busy) n.tlm_n = uint8_t((o.w_ptr - 1) & 0xF);
       }
       if (t_v && t_follow) n.ferr_o = uint8_t(uint32_t(ferr_trip(q_v, o.sq)) << o.ta2 & AXES);
     }

@@ -805,7 +805,9 @@ module mc_regs #(
       if (w_wr) w_ptr <= w_ptr + 4'd1;
       if (w_end) begin
         w_tlm_busy <= 1'b0;
-        tlm_n      <= w_ptr - 4'd1;
+        // Only a walk that wrote telemetry: its frame may still wait behind
+        // a reply when the next sample's walk ends (Ts under a reply's time).
+        if (w_tlm_busy) tlm_n <= w_ptr - 4'd1;
       end
       if (t_v && t_follow) ferr_o <= ferr_hit[NAXES-1:0];
     end

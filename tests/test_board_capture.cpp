@@ -8,6 +8,7 @@
 #include <deque>
 #include <vector>
 
+#include "host/base/errors.hpp"
 #include "host/link/protocol.hpp"
 
 namespace mc::host {
@@ -66,14 +67,25 @@ class ScriptedBoard final : public ByteStream {
 };
 
 TEST(BoardCapture, DecimationFitsTheFrameAndTheReplies) {
-  // 26 bytes = 260 us at 1 Mbaud; each reply 110 us more.
+  // At 12 MHz and 1 Mbaud a byte takes 122 clocks (120 on the line, 2
+  // handing it over), a frame 32 more: 26 bytes = 3204 clocks = 267 us; each
+  // reply (11 bytes) 1374 clocks more. (BoardRtl.TelemetryFitsTheLineTimeTheHostBudgets
+  // holds the figure to the board.)
+  constexpr double clk = 12e6;
   EXPECT_EQ(telemetry_frame_bytes(1), 26);
-  EXPECT_EQ(telemetry_decimation(100e-6, 1e6, 0), 3u);
-  EXPECT_EQ(telemetry_decimation(100e-6, 1e6, 2), 5u);  // 480 us
-  EXPECT_EQ(telemetry_decimation(260e-6, 1e6, 0), 1u);  // exactly one frame per sample
-  EXPECT_EQ(telemetry_decimation(259e-6, 1e6, 0), 2u);
-  EXPECT_EQ(telemetry_decimation(1e-3, 1e6, 2), 1u);
-  EXPECT_EQ(telemetry_decimation(100e-6, 115200, 0), 23u);
+  EXPECT_DOUBLE_EQ(board_tx_seconds(26, 1, clk, 1e6), 3204 / clk);
+  EXPECT_DOUBLE_EQ(board_tx_seconds(26 + 2 * kReplyBytes, 3, clk, 1e6), 5952 / clk);
+  EXPECT_EQ(telemetry_decimation(100e-6, clk, 1e6, 0), 3u);
+  EXPECT_EQ(telemetry_decimation(100e-6, clk, 1e6, 1), 4u);      // 381.5 us
+  EXPECT_EQ(telemetry_decimation(100e-6, clk, 1e6, 2), 5u);      // 496 us
+  EXPECT_EQ(telemetry_decimation(3204 / clk, clk, 1e6, 0), 1u);  // exactly one frame per sample
+  EXPECT_EQ(telemetry_decimation(3203 / clk, clk, 1e6, 0), 2u);
+  EXPECT_EQ(telemetry_decimation(1e-3, clk, 1e6, 2), 1u);
+  // 115200 baud: 104 clocks a bit (uart_tx rounds 104.17), 1042 a byte.
+  EXPECT_EQ(telemetry_decimation(100e-6, clk, 115200, 0), 23u);
+  EXPECT_EQ(telemetry_decimation(100e-6, clk, 1e6, 0, 3), 6u);  // 58 bytes: 7108 clocks
+  EXPECT_THROW(telemetry_decimation(0, clk, 1e6, 0), InputError);
+  EXPECT_THROW(telemetry_decimation(100e-6, clk, 0, 0), InputError);
 }
 
 TEST(BoardCapture, UnwrapsTheCounterAndReportsGaps) {

@@ -10,6 +10,7 @@
 
 #include "board_harness.hpp"
 #include "hls/pid_core.hpp"
+#include "host/link/board_capture.hpp"
 #include "host/motion/interp_plan.hpp"
 
 namespace mc::test {
@@ -539,6 +540,70 @@ TEST(BoardRtl, TelemetryDecimation) {
   tb.run(kTs * 12);
   ASSERT_FALSE(tb.telemetry().empty());
   EXPECT_GE(uint16_t(hp::parse_telemetry(tb.telemetry().front(), 2).sample - before), 7u);
+}
+
+// The line time the host budgets for a frame (board_tx_seconds, behind
+// telemetry_decimation) against the board: a frame every sample at Ts =
+// that time loses none; at 9 clocks less every other sample is skipped, so
+// the figure is neither short nor more than 8 clocks loose.
+TEST(BoardRtl, TelemetryFitsTheLineTimeTheHostBudgets) {
+  const double frame_s = host::board_tx_seconds(host::telemetry_frame_bytes(1), 1, kClkHz, kBaud);
+  const long fit = std::lround(frame_s * kClkHz);
+  EXPECT_EQ(host::telemetry_decimation(double(fit) / kClkHz, kClkHz, kBaud, 0), 1u);
+  EXPECT_EQ(host::telemetry_decimation(double(fit - 1) / kClkHz, kClkHz, kBaud, 0), 2u);
+  for (const long ts : {fit, fit - 9}) {
+    BoardTb tb;
+    tb.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), uint32_t(ts));
+    tb.write(br::TLM, 1u | 1u << bb::T_AXES_LSB);
+    tb.run(ts * 4);  // the write's reply is gone
+    tb.telemetry().clear();
+    tb.run(ts * 200);
+    tb.write(br::TLM, 0);
+    int gaps = 0, frames = 0;
+    std::optional<uint16_t> last;
+    for (const auto& fr : tb.telemetry()) {
+      const uint16_t n = hp::parse_telemetry(fr, 1).sample;
+      if (last && uint16_t(n - *last) != 1) ++gaps;
+      last = n;
+      ++frames;
+    }
+    ASSERT_GE(frames, 90) << "Ts " << ts;
+    if (ts == fit)
+      EXPECT_EQ(gaps, 0) << "a frame every " << ts << " clocks";
+    else
+      EXPECT_GE(gaps, frames - 2) << "Ts " << ts << " is shorter than a frame: every other sample skipped";
+  }
+}
+
+// A telemetry frame that waits behind a reply keeps its words when the
+// next sample's walk ends first, as it does whenever Ts is shorter than a
+// reply (1374 clocks; 1200 is the default 100 us). PINGs at random times,
+// at the decimation the host picks: every frame whole, no sample skipped.
+TEST(BoardRtl, TelemetryBehindAReplyKeepsItsWords) {
+  for (const long ts : {70L, 1200L}) {
+    BoardTb tb;
+    tb.write(pid_reg::addr(pid_reg::GLOBAL_AXIS, pid_reg::G_TS), uint32_t(ts));
+    const uint32_t decim = host::telemetry_decimation(double(ts) / kClkHz, kClkHz, kBaud, 2);
+    tb.write(br::TLM, decim | 1u << bb::T_AXES_LSB);
+    tb.run(ts * decim * 2);
+    tb.telemetry().clear();
+    std::mt19937 rng{uint32_t(ts)};
+    for (int i = 0; i < 200; ++i) {
+      tb.run(long(rng() % uint32_t(ts * decim * 3)));
+      ASSERT_TRUE(tb.transact(hp::ping(tb.next_seq())));
+    }
+    tb.write(br::TLM, 0);
+    int gaps = 0;
+    std::optional<uint16_t> last;
+    for (const auto& fr : tb.telemetry()) {
+      ASSERT_EQ(fr.payload.size(), 20u) << "Ts " << ts << ": a frame of one axis lost its words";
+      const uint16_t n = hp::parse_telemetry(fr, 1).sample;
+      if (last && uint16_t(n - *last) != decim) ++gaps;
+      last = n;
+    }
+    EXPECT_GT(tb.telemetry().size(), 150u) << "Ts " << ts;
+    EXPECT_EQ(gaps, 0) << "Ts " << ts << ", decimation " << decim;
+  }
 }
 
 // With the PID running: an override holds through samples, and after its

@@ -115,8 +115,7 @@ void step(const StepOptions& o) {
               << axis_name(a) << " at Ts " << format_duration(c.ts) << ", captured "
               << format_duration(duration) << " of board time\n";
     std::cout << "telemetry every " << c.decim << (c.decim == 1 ? " sample" : " samples") << " ("
-              << format_duration(c.decim * c.ts) << "): a frame takes "
-              << format_duration(10.0 * telemetry_frame_bytes(1) / double(l.read(br::BAUD)))
+              << format_duration(c.decim * c.ts) << "): a frame takes " << format_duration(c.frame_s)
               << " on the link (alone it fits every " << c.decim_needed
               << " samples); two replies may queue in front of it; " << c.s.size() << " samples, ";
     if (c.gaps)

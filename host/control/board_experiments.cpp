@@ -51,11 +51,13 @@ auto then_restore(const Work& work, const Restore& restore) {
 StepCapture capture_step_as_is(BoardLink& l, int a, int32_t counts, double duration, const Note& note) {
   StepCapture c;
   c.counts = counts;
-  c.ts = double(read_ts_cycles(l)) / double(l.read(br::CLK_HZ));
+  const double clk = double(l.read(br::CLK_HZ));
+  c.ts = double(read_ts_cycles(l)) / clk;
   const double baud = double(l.read(br::BAUD));
-  c.decim_needed = telemetry_decimation(c.ts, baud, 0);
+  c.frame_s = board_tx_seconds(telemetry_frame_bytes(1), 1, clk, baud);
+  c.decim_needed = telemetry_decimation(c.ts, clk, baud, 0);
   // Two replies may queue in front of a frame: the step's writes, a PING.
-  c.decim = telemetry_decimation(c.ts, baud, 2);
+  c.decim = telemetry_decimation(c.ts, clk, baud, 2);
   enable_axes(l, {a}, note);
   const double period = c.decim * c.ts;
   TelemetryStream tlm(l, a, c.decim, std::max<int64_t>(1, std::llround(0.01 / c.ts)));
@@ -151,7 +153,7 @@ Experiment model_experiment(BoardLink& l, int a, double ts_board, double baud, c
   const double amp = TuneDefaults::prbs_amplitude;
   Experiment e;
   // Two writes per bit change may queue in front of a frame.
-  e.ts = ts_board * telemetry_decimation(ts_board, baud, 2);
+  e.ts = ts_board * telemetry_decimation(ts_board, double(l.read(br::CLK_HZ)), baud, 2);
   p_only(l, a, amp / kClamp, e.ts, 32767, kClamp, note);
   const int32_t start = int32_t(l.read(br::axis(a, br::AX_POS)));
   const std::vector<double> bits = prbs(1, TuneDefaults::prbs_bit_s, TuneDefaults::prbs_duration_s, e.ts);
@@ -189,7 +191,9 @@ Experiment relay_experiment(BoardLink& l, int a, double ts_board, double baud, c
   const double d = TuneDefaults::relay_amplitude;
   p_only(l, a, d, ts_board, uint32_t(d), 0, note);
   Experiment e;
-  const uint32_t decim = telemetry_decimation(ts_board, baud, 1);
+  // Two replies may queue in front of a frame, as in step: the start's
+  // reads and writes follow each other as fast as the link carries them.
+  const uint32_t decim = telemetry_decimation(ts_board, double(l.read(br::CLK_HZ)), baud, 2);
   e.ts = ts_board * decim;
   TelemetryStream tlm(l, a, decim, std::llround(0.01 / ts_board));
   std::vector<TlmSample> v;

@@ -28,7 +28,8 @@ void set_command(BoardLink& l, int a, int32_t target);
 
 // ---- step ---------------------------------------------------------------------------
 struct StepCapture {
-  double ts = 0;  // PID sample period, s
+  double ts = 0;       // PID sample period, s
+  double frame_s = 0;  // a one-axis telemetry frame's time on the line
   uint32_t decim = 1, decim_needed = 1;
   int32_t y0 = 0, counts = 0;
   std::vector<double> t;  // s from the step

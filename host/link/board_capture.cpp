@@ -33,9 +33,16 @@ void catch_interrupts() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
-uint32_t telemetry_decimation(double ts_s, double baud, int replies) {
-  if (!(ts_s > 0) || !(baud > 0)) throw InputError("sample period / baud", "not above 0", "positive values");
-  const double busy_s = 10.0 * (telemetry_frame_bytes(1) + replies * kReplyBytes) / baud;
+double board_tx_seconds(int bytes, int frames, double clk_hz, double baud) {
+  if (!(clk_hz > 0) || !(baud > 0)) throw InputError("clock / baud", "not above 0", "positive values");
+  const double clocks_per_bit = std::floor(clk_hz / baud + 0.5);  // uart_tx's DIV
+  return (double(bytes) * (10 * clocks_per_bit + 2) + 32.0 * frames) / clk_hz;
+}
+
+uint32_t telemetry_decimation(double ts_s, double clk_hz, double baud, int replies, int axes) {
+  if (!(ts_s > 0)) throw InputError("sample period", "not above 0", "a positive value");
+  const double busy_s =
+      board_tx_seconds(telemetry_frame_bytes(axes) + replies * kReplyBytes, 1 + replies, clk_hz, baud);
   return uint32_t(std::max(1.0, std::ceil(busy_s / ts_s - 1e-9)));
 }
 
@@ -61,10 +68,7 @@ bool TelemetryUnwrap::take(const proto::Frame& f, proto::Telemetry& t, int64_t& 
 }
 
 TelemetryStream::TelemetryStream(BoardLink& l, int axis, uint32_t decim, int64_t ping_every)
-    : l_(l),
-      decim_(decim),
-      ping_every_(std::max<int64_t>(1, ping_every)),
-      unwrap_(1u << axis, decim) {
+    : l_(l), decim_(decim), ping_every_(std::max<int64_t>(1, ping_every)), unwrap_(1u << axis, decim) {
   l_.write(br::TLM, 0);
   l_.telemetry().clear();
   l_.write(br::TLM, decim << bb::T_DECIM_LSB | (1u << axis) << bb::T_AXES_LSB);

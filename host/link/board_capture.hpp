@@ -20,10 +20,18 @@ constexpr int telemetry_frame_bytes(int axes) {
   return 6 + 4 * (1 + 4 * axes);
 }
 
-// The smallest decimation N such that a one-axis frame plus `replies`
-// replies queued in front of it (10 bits a byte at `baud`) fit in N sample
-// periods, so no sample is skipped (docs/protocol.md, Telemetry).
-uint32_t telemetry_decimation(double ts_s, double baud, int replies);
+// Line time of `frames` frames of `bytes` bytes in all from the board's
+// transmitter (rtl/uart_tx.v behind rtl/link_tx.v): 10 bits a byte at the
+// UART's whole clocks per bit, 2 clocks to hand each byte over, and 32
+// clocks a frame for what comes between frames (the three-axis board takes
+// 24: the walker's reads of the sample and the hand-over; a test holds the
+// figure to the RTL).
+double board_tx_seconds(int bytes, int frames, double clk_hz, double baud);
+
+// The smallest decimation N such that a frame of `axes` axes plus `replies`
+// replies queued in front of it fit in N sample periods, so no sample is
+// skipped (docs/protocol.md, Telemetry).
+uint32_t telemetry_decimation(double ts_s, double clk_hz, double baud, int replies, int axes = 1);
 
 // SIGINT and SIGTERM while a command has the board in a temporary state:
 // catch_interrupts() installs handlers that only set a flag, and

@@ -320,10 +320,8 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
     if (!(o.ts_s > 0)) throw InputError("sample period", format_number(o.ts_s) + " s", "above 0");
     int n = 0;
     for (unsigned m = o.telemetry_axes; m; m >>= 1) n += int(m & 1);
-    const double baud = double(l.read(br::BAUD));
     // A frame plus the replies to the requests of one round of the loop.
-    const double busy_s = 10.0 * (telemetry_frame_bytes(n) + 4 * kReplyBytes) / baud;
-    decim = uint32_t(std::max(1.0, std::ceil(busy_s / o.ts_s)));
+    decim = telemetry_decimation(o.ts_s, double(l.read(br::CLK_HZ)), double(l.read(br::BAUD)), 4, n);
   }
   if (moves.empty()) return r;
   TelemetryLog tlm(l, o.telemetry_axes, decim);
