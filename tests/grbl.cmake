@@ -39,7 +39,7 @@ add_test(NAME GrblClient.cncjs
 set_tests_properties(GrblClient.cncjs PROPERTIES LABELS client TIMEOUT 300)
 # Debian's python3 by path: bCNC needs Debian's tk and pyserial, not another python on PATH.
 add_test(NAME GrblClient.bcnc COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_bcnc.py $<TARGET_FILE:motionctl>)
-set_tests_properties(GrblClient.bcnc PROPERTIES LABELS client TIMEOUT 300)
+set_tests_properties(GrblClient.bcnc PROPERTIES LABELS client TIMEOUT 300 COST 300)
 # The same senders on `motionctl --sim serve`: the board backend, the planner
 # and the virtual board, with a shorter job (the virtual board runs in real time).
 add_test(NAME GrblClient.cncjs.sim
@@ -56,4 +56,4 @@ target_compile_definitions(test_grbl_board PRIVATE MC_SOURCE_DIR="${CMAKE_SOURCE
 # (GrblBoard.* runs the same backend paths under them in board time).
 add_test(NAME GrblClient.cncjs.cycles
   COMMAND ${MC_NODE} ${CMAKE_CURRENT_SOURCE_DIR}/test_grbl_cncjs.js $<TARGET_FILE:motionctl> ${MC_CNCJS_DIR} --cycles)
-set_tests_properties(GrblClient.cncjs.cycles PROPERTIES LABELS "client;paced" TIMEOUT 450)
+set_tests_properties(GrblClient.cncjs.cycles PROPERTIES LABELS "client;paced" TIMEOUT 450 COST 450)

@@ -96,13 +96,13 @@ target_link_libraries(test_protocol PRIVATE mc_link)
 # tests: alone, it held one of CI's two cores idle for four minutes.
 add_test(NAME synth_board_icebreaker
   COMMAND ${CMAKE_SOURCE_DIR}/scripts/synth.sh ${CMAKE_BINARY_DIR}/synth_test)
-set_tests_properties(synth_board_icebreaker PROPERTIES LABELS synth TIMEOUT 1800)
+set_tests_properties(synth_board_icebreaker PROPERTIES LABELS synth TIMEOUT 1800 COST 1800)
 # The stepper board as `make synth-stepper` builds it: a step generator on
 # every axis, no PID loops.
 add_test(NAME synth_board_icebreaker_stepper
   COMMAND ${CMAKE_COMMAND} -E env STEPPERS=7 SERVO=0
     ${CMAKE_SOURCE_DIR}/scripts/synth.sh ${CMAKE_BINARY_DIR}/synth_test_stepper)
-set_tests_properties(synth_board_icebreaker_stepper PROPERTIES LABELS synth TIMEOUT 1800)
+set_tests_properties(synth_board_icebreaker_stepper PROPERTIES LABELS synth TIMEOUT 1800 COST 1800)
 
 # The step/dir generator of stepper axes: its twin driving a model of a
 # driver's STEP/DIR input, and the RTL against the twin at two widths.
