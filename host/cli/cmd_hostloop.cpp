@@ -28,8 +28,6 @@
 namespace mc::host::cli {
 namespace {
 
-namespace br = board::reg;
-
 // ---- hostloop -----------------------------------------------------------------------
 struct HostloopOptions {
   std::string axis, ts = "10ms", duration = "0.6s", distance = "2", feed = "600";
@@ -57,7 +55,7 @@ void hostloop(const HostloopOptions& o) {
     throw InputError("--ts", quote(o.ts), "a whole number of the board's Ts (" + format_duration(ts) + ")");
   // Two replies per host sample (the DRV write, the TLM_HDR read); the
   // host's samples must fall on frames.
-  uint32_t decim = telemetry_decimation(ts, double(l.read(br::CLK_HZ)), double(l.read(br::BAUD)), 2);
+  uint32_t decim = telemetry_decimation(l, ts, 2);
   while (every % decim != 0 && int64_t(decim) < every) ++decim;
   if (every % decim != 0) decim = uint32_t(every);
   const double delay = ts_host / 2 + mach.host_io_latency_s;

@@ -26,8 +26,6 @@
 namespace mc::host::cli {
 namespace {
 
-namespace br = board::reg;
-
 // ---- tune ---------------------------------------------------------------------------
 struct TuneOptions {
   std::string axis, method = "model", bandwidth, zeta = "2";
@@ -54,11 +52,10 @@ void tune(const TuneOptions& o) {
   const AxisGains cur = read_gains(l, a);
   const double ts = cur.gains.ts;
   if (!o.bandwidth.empty()) check_bandwidth(wc, ts, "--bandwidth", o.bandwidth);  // before the experiment
-  const double baud = double(l.read(br::BAUD));
   catch_interrupts();
   note("tuning axis " + std::string(axis_name(a)) + " (" + o.method +
        "): the experiment runs now; Ctrl-C stops it and restores the gains");
-  const Experiment e = tune_experiment(l, a, o.method, ts, baud, note);
+  const Experiment e = tune_experiment(l, a, o.method, ts, note);
 
   const int32_t step = int32_t(std::llround(1e-3 * cpm));
   const double horizon = 0.2;

@@ -148,12 +148,12 @@ void p_only(BoardLink& l, int a, double kp, double ts, uint32_t out_limit, uint3
 // the start at the PRBS' bit changes (paced on the board's sample count),
 // so the error stays clamped and u = +-amplitude; u and y come from the same
 // telemetry frames, every sample.
-Experiment model_experiment(BoardLink& l, int a, double ts_board, double baud, const Note& note) {
+Experiment model_experiment(BoardLink& l, int a, double ts_board, const Note& note) {
   constexpr uint32_t kClamp = 64;
   const double amp = TuneDefaults::prbs_amplitude;
   Experiment e;
   // Two writes per bit change may queue in front of a frame.
-  e.ts = ts_board * telemetry_decimation(ts_board, double(l.read(br::CLK_HZ)), baud, 2);
+  e.ts = ts_board * telemetry_decimation(l, ts_board, 2);
   p_only(l, a, amp / kClamp, e.ts, 32767, kClamp, note);
   const int32_t start = int32_t(l.read(br::axis(a, br::AX_POS)));
   const std::vector<double> bits = prbs(1, TuneDefaults::prbs_bit_s, TuneDefaults::prbs_duration_s, e.ts);
@@ -187,13 +187,13 @@ Experiment model_experiment(BoardLink& l, int a, double ts_board, double baud, c
 
 // Relay on the board: P-only with Kp = d per count and the output limited
 // to d is a relay (zero output only at zero error) at the board's own Ts.
-Experiment relay_experiment(BoardLink& l, int a, double ts_board, double baud, const Note& note) {
+Experiment relay_experiment(BoardLink& l, int a, double ts_board, const Note& note) {
   const double d = TuneDefaults::relay_amplitude;
   p_only(l, a, d, ts_board, uint32_t(d), 0, note);
   Experiment e;
   // Two replies may queue in front of a frame, as in step: the start's
   // reads and writes follow each other as fast as the link carries them.
-  const uint32_t decim = telemetry_decimation(ts_board, double(l.read(br::CLK_HZ)), baud, 2);
+  const uint32_t decim = telemetry_decimation(l, ts_board, 2);
   e.ts = ts_board * decim;
   TelemetryStream tlm(l, a, decim, std::llround(0.01 / ts_board));
   std::vector<TlmSample> v;
@@ -214,15 +214,15 @@ Experiment relay_experiment(BoardLink& l, int a, double ts_board, double baud, c
   return e;
 }
 
-Experiment tune_experiment(BoardLink& l, int a, const std::string& method, double ts_board, double baud,
+Experiment tune_experiment(BoardLink& l, int a, const std::string& method, double ts_board,
                            const Note& note) {
   if (method != "model" && method != "relay")
     throw InputError("tune method", quote(method), "model or relay");
   const Snapshot snap = snapshot(l, a);
   return then_restore(
       [&] {
-        return method == "model" ? model_experiment(l, a, ts_board, baud, note)
-                                 : relay_experiment(l, a, ts_board, baud, note);
+        return method == "model" ? model_experiment(l, a, ts_board, note)
+                                 : relay_experiment(l, a, ts_board, note);
       },
       [&] { restore(l, a, snap); });
 }

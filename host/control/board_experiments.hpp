@@ -68,13 +68,12 @@ struct Experiment {
   double ts = 0;  // of the capture
 };
 // Open loop through the clamp under a PRBS (identification).
-Experiment model_experiment(BoardLink& l, int a, double ts_board, double baud, const Note& note);
+Experiment model_experiment(BoardLink& l, int a, double ts_board, const Note& note);
 // A relay on the board at its own Ts (Ku, Tu).
-Experiment relay_experiment(BoardLink& l, int a, double ts_board, double baud, const Note& note);
+Experiment relay_experiment(BoardLink& l, int a, double ts_board, const Note& note);
 // One of the two ("model" or "relay"), with the board's state restored
 // afterwards, whether the experiment succeeded or threw.
-Experiment tune_experiment(BoardLink& l, int a, const std::string& method, double ts_board, double baud,
-                           const Note& note);
+Experiment tune_experiment(BoardLink& l, int a, const std::string& method, double ts_board, const Note& note);
 
 // ---- hostloop -----------------------------------------------------------------------
 struct LoopRun {

@@ -46,6 +46,10 @@ uint32_t telemetry_decimation(double ts_s, double clk_hz, double baud, int repli
   return uint32_t(std::max(1.0, std::ceil(busy_s / ts_s - 1e-9)));
 }
 
+uint32_t telemetry_decimation(BoardLink& l, double ts_s, int replies, int axes) {
+  return telemetry_decimation(ts_s, double(l.read(br::CLK_HZ)), double(l.read(br::BAUD)), replies, axes);
+}
+
 bool TelemetryUnwrap::take(const proto::Frame& f, proto::Telemetry& t, int64_t& n) {
   try {
     t = proto::parse_telemetry(f, mask_);

@@ -32,6 +32,8 @@ double board_tx_seconds(int bytes, int frames, double clk_hz, double baud);
 // replies queued in front of it fit in N sample periods, so no sample is
 // skipped (docs/protocol.md, Telemetry).
 uint32_t telemetry_decimation(double ts_s, double clk_hz, double baud, int replies, int axes = 1);
+// The same for the board on `l`, with its clock and baud rate (CLK_HZ, BAUD).
+uint32_t telemetry_decimation(BoardLink& l, double ts_s, int replies, int axes = 1);
 
 // SIGINT and SIGTERM while a command has the board in a temporary state:
 // catch_interrupts() installs handlers that only set a flag, and

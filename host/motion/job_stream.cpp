@@ -321,7 +321,7 @@ StreamResult stream_job(BoardLink& l, const std::vector<Move>& moves, const std:
     int n = 0;
     for (unsigned m = o.telemetry_axes; m; m >>= 1) n += int(m & 1);
     // A frame plus the replies to the requests of one round of the loop.
-    decim = telemetry_decimation(o.ts_s, double(l.read(br::CLK_HZ)), double(l.read(br::BAUD)), 4, n);
+    decim = telemetry_decimation(l, o.ts_s, 4, n);
   }
   if (moves.empty()) return r;
   TelemetryLog tlm(l, o.telemetry_axes, decim);
