@@ -349,15 +349,23 @@ class Machine {
     start_step_ = uint64_t(std::llround(1e-3 / m.plant_dt_s));  // the command starts at 1 ms
     end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
     record_every_ = std::max<uint64_t>(1, uint64_t(std::llround(s_.record_dt_s / m.plant_dt_s)));
-    // The trace's length is known, and so are its times: the records are
-    // written in place (record_metres, and jump()'s holds the positions).
+    // The trace's length is known: the records are written in place
+    // (record_metres, and jump()'s holds the positions). Their times are
+    // the record's index scaled, which nothing in the run reads: finish()
+    // writes them with the metrics.
     records_ = size_t((end_step_ - start_step_) / record_every_);
-    res_.t.resize(records_);
-    for (size_t i = 0; i < records_; ++i) res_.t[i] = double(uint64_t(i + 1) * record_every_) * dt_;
     for (int a = 0; a < kCoreAxes; ++a) {
       res_.cmd_m[size_t(a)].resize(records_);
       res_.pos_m[size_t(a)].resize(records_);
       if (job_) enc_[size_t(a)].resize(records_);
+    }
+    // One controller output a period, a few more for a PC's late wakes:
+    // the outputs are not copied as they come.
+    if (s_.platform.ts_s > 0) {
+      const double period_s = std::max(s_.platform.ts_s, dt_);
+      const size_t outputs = size_t(double(end_step_ - start_step_) * dt_ / period_s * 1.05) + 16;
+      res_.sample_clock.reserve(outputs);
+      for (auto& u : res_.sample_u) u.reserve(outputs);
     }
     if (s_.platform.host) {
       for (int a = 0; a < kCoreAxes; ++a) {
@@ -418,6 +426,8 @@ class Machine {
 
   RunResult finish(double wall_s) {
     check_records(end_step_, 0);
+    res_.t.resize(records_);
+    for (size_t i = 0; i < records_; ++i) res_.t[i] = double(uint64_t(i + 1) * record_every_) * dt_;
     res_.sim_s = double(end_step_ - start_step_) * dt();
     res_.wall_s = wall_s;
     for (int a = 0; a < kCoreAxes; ++a)

@@ -157,11 +157,24 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
       const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
-      if (quiet > 0) {
+      if (quiet > 0 && next <= taken + quiet) {
         // Samples inside the quiet stretch, from the run (a stuck shaft
-        // stands where it is).
-        for (; next <= taken + quiet; next += samples.every)
-          sample(stuck ? position_m() : run_x(uint32_t(k_ + (next - taken)), 2) * rad_to_m_);
+        // stands where it is): room checked once, and the anchor read into
+        // locals, which the stores through out cannot alias.
+        const uint64_t records = (taken + quiet - next) / samples.every + 1;
+        if (samples.room < records) throw std::logic_error("plant hold: more samples than room for them");
+        double* out = samples.out;
+        if (stuck) {
+          const double at = position_m();
+          for (uint64_t i = 0; i < records; ++i) out[i] = at;
+        } else {
+          run_positions(uint32_t(k_ + (next - taken)), uint32_t(samples.every), records, out);
+        }
+        samples.out += records;
+        samples.room -= records;
+        next += records * samples.every;
+      }
+      if (quiet > 0) {
         k_ += quiet;
         steps_ += quiet;
         taken += quiet;
@@ -311,7 +324,9 @@ int pwm_duty(const DriveConfig& d, int32_t u) {
 double drive_volts(const DriveConfig& d, int32_t u) {
   const int32_t s = saturate(u);
   if (d.kind == DriveConfig::Kind::Pwm) {
-    const double v = std::ldexp(double(pwm_duty(d, s)), -d.pwm_bits) * d.supply_v;
+    // A power of two's reciprocal is exact: the product is ldexp's, for
+    // a fraction of its time (the drive changes every sample).
+    const double v = double(pwm_duty(d, s)) * (1.0 / double(1u << d.pwm_bits)) * d.supply_v;
     return s < 0 ? -v : v;
   }
   const int32_t code = floor_shift(s, 16 - d.dac_bits);

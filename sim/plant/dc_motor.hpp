@@ -141,6 +141,17 @@ class AxisPlant {
     return ax + (p.bd[i][0] * u0_(0) + p.bd[i][1] * u0_(1));
   }
   Eigen::Vector3d run_state(uint32_t k) const { return {run_x(k, 0), run_x(k, 1), run_x(k, 2)}; }
+  // The table positions (m) at steps k, k + every, ... of the run, count of
+  // them: run_x(., 2) * rad_to_m_ term for term.
+  void run_positions(uint32_t k, uint32_t every, uint64_t count, double* out) const {
+    const double x0 = x0_(0), x1 = x0_(1), x2 = x0_(2), u0 = u0_(0), u1 = u0_(1), to_m = rad_to_m_;
+    const Power* pk = pw_->k.data();
+    for (uint64_t i = 0; i < count; ++i) {
+      const Power& p = pk[k + i * every];
+      const double* a = p.ad[2];
+      out[i] = (a[0] * x0 + (a[1] * x1 + a[2] * x2) + (p.bd[2][0] * u0 + p.bd[2][1] * u1)) * to_m;
+    }
+  }
   double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
   // Of the next lim steps of the run, how many end without an event (a
   // count other than `count`, or friction stopping the shaft); how many
