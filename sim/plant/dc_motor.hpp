@@ -129,28 +129,26 @@ class AxisPlant {
   // A new run from the current state with this input; the shaft moves in
   // direction dir (friction), or is stuck.
   void anchor(double volts, double dir);
-  // State i (0 current, 1 speed, 2 angle) k steps into the run. The sums go
-  // in the order Eigen's Ad^k x0 + Bd_k u0 takes them (the figures the
-  // plant gave before it was read by rows), and every path reads the run
-  // through here.
-  double run_x(uint32_t k, int i) const {
-    const Power& p = pw_->k[k];
+  // State i (0 current, 1 speed, 2 angle) of a run: row i of Ad^k x0 +
+  // Bd_k u0 (p: k's powers). The sums go in the order Eigen's product takes
+  // them (the figures the plant gave before it was read by rows), and every
+  // path reads the run through here.
+  static double run_row(const Power& p, int i, const double* x0, const double* u0) {
     const double* a = p.ad[i];
-    const double ax = i < 2 ? a[0] * x0_(0) + a[1] * x0_(1) + a[2] * x0_(2)
-                            : a[0] * x0_(0) + (a[1] * x0_(1) + a[2] * x0_(2));
-    return ax + (p.bd[i][0] * u0_(0) + p.bd[i][1] * u0_(1));
+    const double ax =
+        i < 2 ? a[0] * x0[0] + a[1] * x0[1] + a[2] * x0[2] : a[0] * x0[0] + (a[1] * x0[1] + a[2] * x0[2]);
+    return ax + (p.bd[i][0] * u0[0] + p.bd[i][1] * u0[1]);
   }
+  // State i k steps into this run.
+  double run_x(uint32_t k, int i) const { return run_row(pw_->k[k], i, x0_.data(), u0_.data()); }
   Eigen::Vector3d run_state(uint32_t k) const { return {run_x(k, 0), run_x(k, 1), run_x(k, 2)}; }
   // The table positions (m) at steps k, k + every, ... of the run, count of
-  // them: run_x(., 2) * rad_to_m_ term for term.
+  // them. The anchor is read into locals once: stores through out might
+  // alias the plant's own doubles, and run_x would read them again each time.
   void run_positions(uint32_t k, uint32_t every, uint64_t count, double* out) const {
-    const double x0 = x0_(0), x1 = x0_(1), x2 = x0_(2), u0 = u0_(0), u1 = u0_(1), to_m = rad_to_m_;
+    const double x0[3] = {x0_(0), x0_(1), x0_(2)}, u0[2] = {u0_(0), u0_(1)}, to_m = rad_to_m_;
     const Power* pk = pw_->k.data();
-    for (uint64_t i = 0; i < count; ++i) {
-      const Power& p = pk[k + i * every];
-      const double* a = p.ad[2];
-      out[i] = (a[0] * x0 + (a[1] * x1 + a[2] * x2) + (p.bd[2][0] * u0 + p.bd[2][1] * u1)) * to_m;
-    }
+    for (uint64_t i = 0; i < count; ++i) out[i] = run_row(pk[k + i * every], 2, x0, u0) * to_m;
   }
   double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
   // Of the next lim steps of the run, how many end without an event (a
