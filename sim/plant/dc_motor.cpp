@@ -147,10 +147,15 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
   const int64_t count = encoder_count();
   uint64_t taken = 0;
   uint64_t next = samples.out ? samples.first : n + 1;  // the next sampled step of the call
-  const auto sample = [&](double position_m) {
-    if (samples.room == 0) throw std::logic_error("plant hold: more samples than room for them");
-    *samples.out++ = position_m;
-    --samples.room;
+  // The trace's slots for the next `records` sampled steps, its room
+  // checked once; next moves past them.
+  const auto take = [&](uint64_t records) {
+    if (samples.room < records) throw std::logic_error("plant hold: more samples than room for them");
+    double* const at = samples.out;
+    samples.out += records;
+    samples.room -= records;
+    next += records * samples.every;
+    return at;
   };
   while (taken < n) {
     if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun) {
@@ -159,20 +164,14 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
       const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
       if (quiet > 0 && next <= taken + quiet) {
         // Samples inside the quiet stretch, from the run (a stuck shaft
-        // stands where it is): room checked once, and the anchor read into
-        // locals, which the stores through out cannot alias.
+        // stands where it is).
         const uint64_t records = (taken + quiet - next) / samples.every + 1;
-        if (samples.room < records) throw std::logic_error("plant hold: more samples than room for them");
-        double* out = samples.out;
-        if (stuck) {
-          const double at = position_m();
-          for (uint64_t i = 0; i < records; ++i) out[i] = at;
-        } else {
-          run_positions(uint32_t(k_ + (next - taken)), uint32_t(samples.every), records, out);
-        }
-        samples.out += records;
-        samples.room -= records;
-        next += records * samples.every;
+        const uint32_t k = uint32_t(k_ + (next - taken));
+        double* const out = take(records);
+        if (stuck)
+          std::fill_n(out, records, position_m());
+        else
+          run_positions(k, uint32_t(samples.every), records, out);
       }
       if (quiet > 0) {
         k_ += quiet;
@@ -188,10 +187,7 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     // The step with the event (or the first of a new run): as step() does it.
     step(v);
     ++taken;
-    if (next == taken) {
-      sample(position_m());
-      next += samples.every;
-    }
+    if (next == taken) *take(1) = position_m();
     if (encoder_count() != count) return taken;
   }
   return taken;
