@@ -358,6 +358,11 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       const uint64_t took = sampled ? held.hold(v, n - done, out) : held.hold(v, n - done);
       samples.resize(samples.size() - out.room);
       ASSERT_EQ(out.out, samples.data() + samples.size());
+      if (sampled && n - done >= first) {
+        // first is left on the next sample, counted from the call's end.
+        const uint64_t next = took < first ? first : first + ((took - first) / every + 1) * every;
+        ASSERT_EQ(out.first, next - took) << "stretch " << s;
+      }
       hold_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       total += took;
       ASSERT_GE(took, 1u);

@@ -350,12 +350,13 @@ class Machine {
     end_step_ = start_step_ + uint64_t(std::llround(s_.scenario.duration_s / m.plant_dt_s));
     record_every_ = std::max<uint64_t>(1, uint64_t(std::llround(s_.record_dt_s / m.plant_dt_s)));
     // The trace's length is known: the records are written in place
-    // (record_metres, and jump()'s holds the positions). Their times are
+    // (record_values, and jump()'s holds the positions). Their times are
     // the record's index scaled, which nothing in the run reads: finish()
-    // writes them with the metrics.
+    // writes them with the metrics. The command is kept as the core's
+    // counts, half the pages of metres, and scaled there too.
     records_ = size_t((end_step_ - start_step_) / record_every_);
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)].resize(records_);
+      cmd_counts_[size_t(a)].resize(records_);
       res_.pos_m[size_t(a)].resize(records_);
       if (job_) enc_[size_t(a)].resize(records_);
     }
@@ -428,6 +429,11 @@ class Machine {
     check_records(end_step_, 0);
     res_.t.resize(records_);
     for (size_t i = 0; i < records_; ++i) res_.t[i] = double(uint64_t(i + 1) * record_every_) * dt_;
+    for (int a = 0; a < kCoreAxes; ++a) {
+      res_.cmd_m[size_t(a)].resize(records_);
+      for (size_t i = 0; i < records_; ++i)
+        res_.cmd_m[size_t(a)][i] = double(cmd_counts_[size_t(a)][i]) / cpm_;
+    }
     res_.sim_s = double(end_step_ - start_step_) * dt();
     res_.wall_s = wall_s;
     for (int a = 0; a < kCoreAxes; ++a)
@@ -463,7 +469,7 @@ class Machine {
     std::vector<mc::host::Vec3d> pos(n), enc(n);
     for (size_t i = 0; i < n; ++i) {
       for (size_t a = 0; a < size_t(kCoreAxes); ++a) {
-        cmd[i][a] = int32_t(std::llround(res_.cmd_m[a][i] * cpm_));
+        cmd[i][a] = cmd_counts_[a][i];
         pos[i][a] = res_.pos_m[a][i] * 1e3;
         enc[i][a] = double(enc_[a][i]) / cpm_ * 1e3;
       }
@@ -560,8 +566,8 @@ class Machine {
     for (int a = 0; a < kCoreAxes; ++a) {
       count0[a] = plant_[size_t(a)].encoder_count();
       ahead_[size_t(a)].take_motion(plant_[size_t(a)]);
-      AxisPlant::Samples at{1, record_every_, res_.pos_m[size_t(a)].data() + rec_, records_ - rec_};
-      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, first, at, counts_[a]);
+      AxisPlant::Samples at{first, record_every_, res_.pos_m[size_t(a)].data() + rec_, records_ - rec_};
+      ahead_steps_[a] = hold_counting(ahead_[size_t(a)], a, sk, most, at, counts_[a]);
       most = std::min(most, ahead_steps_[a]);
     }
     // The edges: a count reached at the end of step s shows from clock
@@ -580,21 +586,16 @@ class Machine {
       if (ahead_steps_[a] == whole)
         plant_[size_t(a)].take_motion(ahead_[size_t(a)]);
       else if (AxisPlant::Samples none;
-               hold_counting(plant_[size_t(a)], a, sk, whole, whole + 1, none, recount_) != whole)
+               hold_counting(plant_[size_t(a)], a, sk, whole, none, recount_) != whole)
         throw std::logic_error("co-simulation: a plant held again took other steps");
     }
     // The records (their positions the holds wrote): a step's command is
     // the one its last clock showed, after all its edges but the last; its
     // count, the last the axis reached.
     size_t mv = 0, cn[kCoreAxes] = {};
-    double cmd_m[kCoreAxes];
-    for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
     for (uint64_t j = first; j <= whole; j += record_every_) {
-      if (mv < moves_.size() && moves_[mv].clock <= j * k_ - 1) {
-        for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
-          for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
-        for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
-      }
+      for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
+        for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
       int64_t count[kCoreAxes] = {};
       if (job_)
         for (int a = 0; a < kCoreAxes; ++a) {
@@ -602,7 +603,7 @@ class Machine {
           while (cn[a] < c.size() && c[cn[a]].step <= j) ++cn[a];
           count[a] = cn[a] == 0 ? count0[a] : c[cn[a] - 1].count;
         }
-      record_command(cmd_m, count);
+      record_command(cmd, count);
     }
     check_records(step_ + whole, 0);
     step_ += whole;
@@ -707,9 +708,10 @@ class Machine {
   // Steps s0 + 1 .. n (from 1) of a skip that sk.drive describes, as the
   // clock path takes them (each step on the mean of its clocks' volts,
   // StepVolts), up to n or the first that changes the count; positions
-  // sampled after steps first, first + record_every_, ... written through
-  // out, which moves on past them. Returns the last step taken.
-  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n, uint64_t first,
+  // sampled along the way written through out (AxisPlant::Samples, its
+  // first counted from step s0), which moves on past them. Returns the last
+  // step taken.
+  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n,
                        AxisPlant::Samples& out) {
     const DriveSteps& ds = sk.drive[a];
     const int64_t count = p.encoder_count();
@@ -731,8 +733,6 @@ class Machine {
         v = averaged_volts(a, ds.at(c0));
         len = std::min(n, next / k_) - s;
       }
-      // The records in this piece, counted from its start.
-      out.first = first > s ? first - s : record_every_ - (s - first) % record_every_;
       const uint64_t t = p.hold(v, len, out);
       s += t;
       // hold() counts from its own start: a piece that ends on the change
@@ -745,13 +745,13 @@ class Machine {
   // Up to n steps of hold_driven(), through the count changes: each count
   // reached goes in *counts with its step. Ends at n or after a step that
   // brings more than one new count. Returns the last step taken.
-  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, uint64_t first,
-                         AxisPlant::Samples out, std::vector<StepCount>& counts) {
+  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, AxisPlant::Samples out,
+                         std::vector<StepCount>& counts) {
     counts.clear();
     uint64_t s = 0;
     while (s < n) {
       const int64_t before = p.encoder_count();
-      s = hold_driven(p, a, sk, s, n, first, out);
+      s = hold_driven(p, a, sk, s, n, out);
       const int64_t now = p.encoder_count();
       if (now == before) break;
       counts.push_back(StepCount{s, now});
@@ -1006,20 +1006,15 @@ class Machine {
   }
   // The trace's sample at the end of plant step `step`.
   void record_values(uint64_t step, const int32_t* cmd, const double* pos_m, const int64_t* count) {
-    double cmd_m[kCoreAxes];
-    for (int a = 0; a < kCoreAxes; ++a) cmd_m[a] = double(cmd[a]) / cpm_;
-    record_metres(step, cmd_m, pos_m, count);
-  }
-  void record_metres(uint64_t step, const double* cmd_m, const double* pos_m, const int64_t* count) {
     check_records(step, 1);
     for (int a = 0; a < kCoreAxes; ++a) res_.pos_m[size_t(a)][rec_] = pos_m[a];
-    record_command(cmd_m, count);
+    record_command(cmd, count);
   }
   // The rest of the next record, its positions in place (a jump's holds
   // wrote them): the command, a job's counts.
-  void record_command(const double* cmd_m, const int64_t* count) {
+  void record_command(const int32_t* cmd, const int64_t* count) {
     for (int a = 0; a < kCoreAxes; ++a) {
-      res_.cmd_m[size_t(a)][rec_] = cmd_m[a];
+      cmd_counts_[size_t(a)][rec_] = cmd[a];
       if (job_) enc_[size_t(a)][rec_] = count[a];
     }
     ++rec_;
@@ -1040,6 +1035,8 @@ class Machine {
   const double dt_ = s_.machine.plant_dt_s;
   Command cmd_;
   SegmentFeed feed_;
+  std::array<TraceVector<int32_t>, kCoreAxes>
+      cmd_counts_;                                   // the command per record, counts (finish(): metres)
   std::array<TraceVector<int64_t>, kCoreAxes> enc_;  // job: encoder counts per record
   std::vector<AxisPlant> plant_;
   std::vector<AxisPlant> ahead_;  // jump(): the plants held ahead

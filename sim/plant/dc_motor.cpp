@@ -158,7 +158,8 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     return at;
   };
   while (taken < n) {
-    if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun) {
+    // A stretch of a step or two is taken by step(): cheaper than a search.
+    if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun && n - taken >= kSearchFrom) {
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
       const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
@@ -188,8 +189,9 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     step(v);
     ++taken;
     if (next == taken) *take(1) = position_m();
-    if (encoder_count() != count) return taken;
+    if (encoder_count() != count) break;
   }
+  if (samples.out) samples.first = next - taken;
   return taken;
 }
 
@@ -215,9 +217,6 @@ uint32_t last_of_sign(uint32_t lo, uint32_t hi, F f) {
 }  // namespace
 
 uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
-  const auto event = [&](uint32_t j) {
-    return (friction_ && run_x(j, 1) * dir_ <= 0) || count_at(run_x(j, 2)) != count;
-  };
   const auto accel = [&](uint32_t j) {
     return m_.kt_nm_per_a * run_x(j, 0) - m_.b_nm_s_per_rad * run_x(j, 1) - u0_(1);
   };
@@ -227,9 +226,13 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   // where it crosses zero): on each the angle is monotone too, so once an
   // event holds it holds to the piece's end, and a bisection finds the first.
   const uint32_t lo = k_, hi = k_ + lim;
+  const uint32_t turn = last_of_sign(lo, hi, accel);
+  if (turn == hi && friction_) {
+    // One piece, the case of almost every stretch: its end tells.
+    return lim == 0 || !event_at(hi, count) ? lim : first_event(lo, hi, count) - 1 - lo;
+  }
   uint32_t cuts[4];
   int n = 0;
-  const uint32_t turn = last_of_sign(lo, hi, accel);
   for (const auto& [a, b] : {std::pair{lo, turn}, std::pair{std::min(turn + 1, hi), hi}}) {
     if (n > 0 && a == cuts[n - 1]) continue;  // no second piece
     const uint32_t cross = friction_ ? b : last_of_sign(a, b, speed);
@@ -238,35 +241,37 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   }
   uint32_t from = lo;  // no event here
   for (int i = 0; i < n; ++i) {
-    uint32_t to = cuts[i];
+    const uint32_t to = cuts[i];
     if (to == from) continue;
-    if (event(to)) {
-      // The step at which the speed at `from` would reach the next count
-      // is most often the event's or next to it: probed with its neighbour
-      // first, it narrows what the bisection has left. Both keep the first
-      // step with the event (the piece is monotone).
-      const double per_step = run_x(from, 1) * dt_,
-                   edge = double(per_step > 0 ? count + 1 : count) / rad_to_count_;
-      const double ahead = per_step != 0 ? (edge - run_x(from, 2)) / per_step : -1;
-      if (ahead > 0 && ahead < double(to - from - 1)) {
-        const uint32_t g = from + std::max<uint32_t>(1, uint32_t(std::ceil(ahead)));
-        if (event(g)) {
-          to = g;
-          if (to - from > 1) (event(g - 1) ? to : from) = g - 1;
-        } else {
-          from = g;
-          if (to - from > 1) (event(g + 1) ? to : from) = g + 1;
-        }
-      }
-      while (to - from > 1) {
-        const uint32_t mid = from + (to - from) / 2;
-        (event(mid) ? to : from) = mid;
-      }
-      return to - 1 - lo;
-    }
+    if (event_at(to, count)) return first_event(from, to, count) - 1 - lo;
     from = to;
   }
   return lim;
+}
+
+uint32_t AxisPlant::first_event(uint32_t from, uint32_t to, int64_t count) const {
+  // The step at which the speed at `from` would reach the next count is
+  // most often the event's or next to it: probed with its neighbour first,
+  // it narrows what the bisection has left. Both keep the first step with
+  // the event (the piece is monotone).
+  const double per_step = run_x(from, 1) * dt_,
+               edge = double(per_step > 0 ? count + 1 : count) / rad_to_count_;
+  const double ahead = per_step != 0 ? (edge - run_x(from, 2)) / per_step : -1;
+  if (ahead > 0 && ahead < double(to - from - 1)) {
+    const uint32_t g = from + std::max<uint32_t>(1, uint32_t(std::ceil(ahead)));
+    if (event_at(g, count)) {
+      to = g;
+      if (to - from > 1) (event_at(g - 1, count) ? to : from) = g - 1;
+    } else {
+      from = g;
+      if (to - from > 1) (event_at(g + 1, count) ? to : from) = g + 1;
+    }
+  }
+  while (to - from > 1) {
+    const uint32_t mid = from + (to - from) / 2;
+    (event_at(mid, count) ? to : from) = mid;
+  }
+  return to;
 }
 
 uint32_t AxisPlant::steps_before_breakaway(uint32_t lim) const {

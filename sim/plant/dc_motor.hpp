@@ -50,7 +50,8 @@ class AxisPlant {
   // of the steps first, first + every, ... of the call (counted from 1)
   // that it takes to out[0], out[1], ... (out then points past the last;
   // room counts down; no out: none): a trace sampled along a held stretch
-  // without ending it.
+  // without ending it. first is left counting from the end of the call, so
+  // the next call goes on with the same samples.
   struct Samples {
     uint64_t first = 1, every = 1;
     double* out = nullptr;
@@ -155,6 +156,16 @@ class AxisPlant {
   // count other than `count`, or friction stopping the shaft); how many
   // stuck steps come before the breakaway.
   uint32_t steps_before_event(uint32_t lim, int64_t count) const;
+  // An event at step j of the run: a count other than `count`, or friction
+  // stopping the shaft.
+  bool event_at(uint32_t j, int64_t count) const {
+    return (friction_ && run_x(j, 1) * dir_ <= 0) || count_at(run_x(j, 2)) != count;
+  }
+  // The first step of from + 1 .. to with the event, which `to` has and
+  // `from` has not, on a piece of the run where the angle is monotone.
+  uint32_t first_event(uint32_t from, uint32_t to, int64_t count) const;
+  // Stretches shorter than this go by step().
+  static constexpr uint64_t kSearchFrom = 3;
   uint32_t steps_before_breakaway(uint32_t lim) const;
 
   // floor(theta * counts per radian), as floor() gives it but without a
