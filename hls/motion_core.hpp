@@ -151,23 +151,9 @@ class MotionCore {
         n.in_cmd[a] = cmd[a];
         n.in_fb[a] = fb[a];
       }
-    // Sample RAM: the RTL's sweep fills bank !pb word by word; only the
-    // published bank pb is ever read, so writing the words at done is the
-    // same to every reader. A reset neither swaps nor clears it.
+    // Sample RAM (publish()): a reset neither swaps nor clears it.
     n.smp_rdata = read_bank(in.smp_raddr);
-    if (!in.rst && done) {
-      for (int a = 0; a < NAXES; ++a) {
-        int32_t* w = bank_[!r.pb][a];
-        w[SMP_CMD] = r.in_cmd[a];
-        w[SMP_FB] = r.in_fb[a];
-        w[SMP_ERR] = pid_.core().err(a);
-        w[SMP_OUT] = int32_t(uint32_t(uint16_t(pid_.core().u(a))) | uint32_t(pid_.core().sat(a)) << 16 |
-                             uint32_t(pid_.enabled(a)) << 17);
-        const int64_t follow = int64_t(r.in_cmd[a]) - r.in_fb[a];
-        w[SMP_FOLLOW] = int32_t(std::clamp<int64_t>(follow, INT32_MIN, INT32_MAX));
-      }
-      n.pb = !r.pb;
-    }
+    if (!in.rst && done) publish(r);
     for (int a = 0; a < NAXES; ++a) {
       if (in.rst) {
         n.drv_cmd[a] = 0;
@@ -178,7 +164,6 @@ class MotionCore {
         n.drv_cmd[a] = in.drv_ovr_val;
       else if (pid_.sweep_clock() == drv_clock(a) && !in.drv_ovr[a])
         n.drv_cmd[a] = int16_t(pid_.core().u(a));
-      if (done) n.smp_sat[a] = pid_.core().sat(a);
     }
 
     // Drive stage.
@@ -264,7 +249,14 @@ class MotionCore {
     // so that a stretch may go through a sample, drive_steps() telling the
     // drive up to the next sweep's first update.
     bool sample = false;
+    // With sample: a stretch may also go through done (the sample's words
+    // into the sample RAM, its bank published, the saturation flags), the
+    // tick alone ending it; done_in() before the skip tells done's clock.
+    bool done = false;
   };
+  // Of the clocks from this one, the number of the sweep's done (0: this
+  // one), or Pid::kNoDone.
+  uint32_t done_in() const { return pid_.done_in(); }
   bool quiet_as(const In& in, uint32_t n, Let let) const {
     return quiet_but_interp(in, n, let) && interp_quiet(in, n, let.busy);
   }
@@ -281,7 +273,7 @@ class MotionCore {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
     const bool others = quiet_but_pid_interp(in, n, let) && interp_quiet(in, n, let.busy);
     if (others_out) *others_out = n > 0 && let.drive && let.busy && others;
-    if (others && pid_.quiet(pi, n, let.sample)) return kQuiet;
+    if (others && pid_.quiet(pi, n, let.sample, through_done(let))) return kQuiet;
     // Only the sweep's drive updates (unless let.drive) and a running
     // interpolator's next iteration (unless let.busy) depend on n.
     const bool one = n > 0 && let.drive && let.busy
@@ -298,7 +290,7 @@ class MotionCore {
   // are asked.
   int quiet_or_pid_again(const In& in, uint32_t n, Let let) const {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
-    if (n > 0 && pid_.quiet(pi, n, let.sample)) return kQuiet;
+    if (n > 0 && pid_.quiet(pi, n, let.sample, through_done(let))) return kQuiet;
     return pid_.quiet_but_timers(pi) ? kPidClock : 0;
   }
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
@@ -399,7 +391,7 @@ class MotionCore {
   // The same, for quiet_as(.., let): drive updates bound it unless
   // let.drive, the next iteration unless let.busy.
   uint32_t quiet_limit_as(Let let) const {
-    uint32_t l = pid_.quiet_limit() + (let.sample ? 1 : 0);
+    uint32_t l = pid_.quiet_limit(through_done(let)) + (let.sample ? 1 : 0);
     const int s = pid_.sweep_clock();
     if (s != 0 && !let.drive)
       for (int a = 0; a < NAXES; ++a)
@@ -520,7 +512,7 @@ class MotionCore {
   bool quiet_but_interp(const In& in, uint32_t n, Let let, bool pid_own = false) const {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
     return quiet_but_pid_interp(in, n, let) &&
-           (pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample));
+           (pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample, through_done(let)));
   }
   // quiet_but_interp() without the PID's own part.
   bool quiet_but_pid_interp(const In& in, uint32_t n, Let let) const {
@@ -553,8 +545,12 @@ class MotionCore {
   // pins that ch changes (let.settle).
   void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0) {
     if (let.drive) skip_drive(n, *in);
-    // The port reads the published bank, which no skipped clock swaps.
-    if (let.sample) r_.smp_rdata = read_bank(in->smp_raddr);
+    // The port reads the published bank as the last clock found it: done
+    // swaps it at its edge (let.done).
+    const uint32_t d = through_done(let) ? pid_.done_in() : Pid::kNoDone;
+    if (let.sample && d + 1 == n) r_.smp_rdata = read_bank(in->smp_raddr);
+    if (d < n) publish(r_);
+    if (let.sample && d + 1 != n) r_.smp_rdata = read_bank(in->smp_raddr);
     pid_.skip(n);
     for (int a = 0; a < NAXES; ++a) {
       if (let.settle) {
@@ -597,7 +593,28 @@ class MotionCore {
   }
 
   uint32_t read_bank(uint8_t raddr) const { return uint32_t(bank_[r_.pb][raddr >> 3 & 3][raddr & 7]); }
+  static bool through_done(Let let) { return let.sample && let.done; }
   struct Regs;
+  // Done's edge (no reset), from r, the registers of its clock: the sample
+  // into the bank not published, which it then publishes, and the
+  // saturation flags. The RTL's sweep fills that bank word by word; only
+  // the published bank is ever read, so writing the words at done is the
+  // same to every reader.
+  void publish(const Regs& r) {
+    const bool pb = r.pb;
+    for (int a = 0; a < NAXES; ++a) {
+      int32_t* w = bank_[!pb][a];
+      w[SMP_CMD] = r.in_cmd[a];
+      w[SMP_FB] = r.in_fb[a];
+      w[SMP_ERR] = pid_.core().err(a);
+      w[SMP_OUT] = int32_t(uint32_t(uint16_t(pid_.core().u(a))) | uint32_t(pid_.core().sat(a)) << 16 |
+                           uint32_t(pid_.enabled(a)) << 17);
+      const int64_t follow = int64_t(r.in_cmd[a]) - r.in_fb[a];
+      w[SMP_FOLLOW] = int32_t(std::clamp<int64_t>(follow, INT32_MIN, INT32_MAX));
+      r_.smp_sat[a] = pid_.core().sat(a);
+    }
+    r_.pb = !pb;
+  }
   static int16_t u_sel(const Regs& r, const In& in, int a) {
     return !in.drv_allow[a] ? int16_t(0) : r.drv_cmd[a];
   }

@@ -258,19 +258,24 @@ class PidCoreClocked {
   // counts the timers down (the sample's arithmetic was done at the tick).
   // edge: the last of the n clocks may be the one whose edge raises the
   // tick or done, which skip() then raises as clock() would.
-  bool quiet(const In& in, uint32_t n, bool edge = false) const {
-    return !in.rst && !in.we && !in.re && !clr_ && !tick_ && !done_ && !rvalid_ &&
-           n < quiet_limit() + 1 + (edge ? 1 : 0);
+  // through_done: done may be among the n clocks (skip() goes through it;
+  // done_in() tells its clock), so only the tick bounds them.
+  bool quiet(const In& in, uint32_t n, bool edge = false, bool through_done = false) const {
+    return !in.rst && !in.we && !in.re && !clr_ && !tick_ && (through_done || !done_) && !rvalid_ &&
+           n < quiet_limit(through_done) + 1 + (edge ? 1 : 0);
   }
   // No port activity and not clearing: what quiet() asks but the timers.
   bool quiet_but_timers(const In& in) const { return !in.rst && !in.we && !in.re && !clr_; }
   void skip(uint32_t n) {
-    if (run_ && uint32_t(left_) == n) {
+    if (run_ && uint32_t(left_) <= n) {
+      // The sweep ends: done in the last of the n edges, or its clock
+      // among them and gone.
+      done_ = uint32_t(left_) == n;
       run_ = false;
       left_ = 0;
-      done_ = true;
-    } else if (run_) {
-      left_ -= int(n);
+    } else {
+      if (run_) left_ -= int(n);
+      done_ = done_ && n == 0;
     }
     if (tcnt_ == n) {
       tick_ = true;
@@ -281,10 +286,14 @@ class PidCoreClocked {
   }
   // The most clocks the timers allow quiet() (0 if the next is the tick or
   // done).
-  uint32_t quiet_limit() const {
+  uint32_t quiet_limit(bool through_done = false) const {
     const uint32_t t = tcnt_ - 1;
-    return run_ && uint32_t(left_ - 1) < t ? uint32_t(left_ - 1) : t;
+    return !through_done && run_ && uint32_t(left_ - 1) < t ? uint32_t(left_ - 1) : t;
   }
+  // Of the clocks from this one, the number of done's (0: this one), or
+  // kNoDone when no sweep is under way.
+  static constexpr uint32_t kNoDone = ~0u;
+  uint32_t done_in() const { return done_ ? 0 : run_ ? uint32_t(left_) : kNoDone; }
   // The sample timer: the tick comes in the clock in which it is 1.
   uint32_t timer() const { return tcnt_; }
 

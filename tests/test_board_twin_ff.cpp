@@ -424,12 +424,13 @@ struct CoreFeed {
 // written now and then, the sample port's address changing), the inputs
 // held as a jump holds them: (1) drive_steps() gives each axis's drive
 // value in every clock up to known_drive_clocks(); (2) skipping what
-// quiet_as(.., Let with drive and sample) allows and clocking what
+// quiet_as(.., Let with drive, sample and done) allows and clocking what
 // quiet_but_pid() allows leaves the whole state that clocking leaves, no
-// segment ends or loads meanwhile, and done comes at the same clocks. Ts
+// segment ends or loads meanwhile, and done comes at the same clocks
+// (inside a stretch, at the clock done_in() told before it). Ts
 // = 52 clocks is the latency itself: the tick and done at one edge.
 TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
-  const Core::Let all{false, true, true, true, true};
+  const Core::Let all{false, true, true, true, true, true};
   for (const uint32_t ts : {52u, 53u, 200u, 1207u}) {
     std::mt19937_64 rng(ts);
     SegGen gen = core_segments(ts);
@@ -440,7 +441,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     in.enc_filt[1] = 3;
     CoreFeed feed{gen, {0, 0, 0}, {}};
     int64_t count[2] = {};
-    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0, agains = 0;
+    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0, agains = 0, inside = 0;
     for (uint64_t clock = 0; clock < 150'000; ++clock) {
       feed.word(rng, ref, in);
       if (rng() % 20'000 == 0)
@@ -491,7 +492,8 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
           // quiet_or_pid() is the two looks at once, with this Let and
           // with those whose checks depend on the stretch's length.
           for (const Core::Let let :
-               {all, Core::Let{false, true, true, false, true}, Core::Let{false, false, true, true, true}}) {
+               {all, Core::Let{false, true, true, false, true, true},
+                Core::Let{false, false, true, true, true}, Core::Let{false, true, true, true, true}}) {
             const uint32_t l = std::min(n - did, fast.quiet_limit_as(let));
             ASSERT_EQ(fast.quiet_or_pid(h, l, let), l > 0 && fast.quiet_as(h, l, let) ? Core::kQuiet
                                                     : fast.quiet_but_pid(h, let)      ? Core::kPidClock
@@ -500,7 +502,13 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
             ++looks;
           }
           if (q > 0 && fast.quiet_as(h, q, all)) {
+            // Done's clock, when the stretch goes through it.
+            const uint32_t d = fast.done_in();
             const uint32_t m = fast.skip_busy_as(h, q, all, [](uint32_t) {});
+            if (d < m) {
+              fast_done.push_back(did + d);
+              ++inside;
+            }
             did += m;
             if (m > 0) continue;
           }
@@ -530,14 +538,18 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     }
     std::printf(
         "Ts %u: %llu jumps over %llu clocks, %llu drive updates inside, %llu clocks cycled, %llu samples, "
-        "%llu looks, %llu looks again\n",
+        "%llu looks, %llu looks again, %llu dones inside stretches\n",
         ts, (unsigned long long)jumps, (unsigned long long)held, (unsigned long long)changes,
         (unsigned long long)cycled, (unsigned long long)samples, (unsigned long long)looks,
-        (unsigned long long)agains);
+        (unsigned long long)agains, (unsigned long long)inside);
     EXPECT_GT(jumps, 1000u);
+    // Ts = latency: the tick and done at one edge, which ends a stretch.
+    if (ts > 52) {
+      EXPECT_GT(inside, 30u);
+    }
     EXPECT_GT(changes, 30u);
     EXPECT_GT(samples, 30u);
-    EXPECT_GT(agains, 300u);
+    EXPECT_GT(agains, 200u);
   }
 }
 
@@ -550,7 +562,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
 // and the clocks of done must be clocking's.
 TEST(InterpTwinFastForward, JumpsTakeEdgesAsClocks) {
   using PinChange = Core::PinChange;
-  const Core::Let all{false, true, true, true, true};
+  const Core::Let all{false, true, true, true, true, true};
   for (const uint32_t ts : {52u, 200u, 1207u}) {
     std::mt19937_64 rng(ts + 1);
     SegGen gen = core_segments(ts);
@@ -613,8 +625,10 @@ TEST(InterpTwinFastForward, JumpsTakeEdgesAsClocks) {
             refused += f < ch.size();
             QuadOut seen[2];
             for (int x = 0; x < 2; ++x) seen[x] = fast.decoder(x).out();
+            const uint32_t d = fast.done_in();
             const uint32_t m = fast.skip_busy_as(
                 hf, len, all, [](uint32_t) {}, ch.data(), f);
+            if (d < m) fast_done.push_back(did + d);
             // What a reader sees between ticks stays (Let::settle).
             for (int x = 0; x < 2; ++x) {
               const QuadOut o = fast.decoder(x).out();

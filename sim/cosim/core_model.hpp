@@ -92,16 +92,23 @@ class CoreModel {
   virtual bool sample_clock(const CoreIn& /*in*/) const { return false; }
   // This clock ends the running segment (the twin).
   virtual bool segment_ends() const { return false; }
+  // The clocks from this one to the PID's done (0: this one), kNoDone with
+  // no sweep under way: a jump's skips go through done (the twin), the
+  // sample's outputs then recorded from after the skip.
+  static constexpr uint32_t kNoDone = ~0u;
+  virtual uint32_t done_in() const { return kNoDone; }
   // The position command now (the twin; after a skip).
   virtual int32_t cmd(int /*a*/) const { return 0; }
 };
 
 // drive: skips may go through the sweep's drive updates (a user that
 // integrates the drive value over a skip from Skipped::drive) and end with
-// the edge before a PID sample's tick or done; else they end before each.
+// the edge before a PID sample's tick or done (a jump's, through done:
+// quiet_clocks() with `sample` and skip_edges()); else they end before each.
 class TwinCore final : public CoreModel {
  public:
-  explicit TwinCore(bool drive = false) : let_{false, true, true, drive, drive} {}
+  explicit TwinCore(bool drive = false)
+      : let_{false, true, true, drive, drive}, jump_let_{false, true, true, drive, drive, drive} {}
   CoreOut cycle(const CoreIn& in) override {
     const CoreOut o = used_outputs();
     twin_.clock(in);
@@ -112,10 +119,11 @@ class TwinCore final : public CoreModel {
     return n > 0 && twin_.quiet_as(in, n, let_) ? n : 0;
   }
   uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample, bool again) const override {
-    const uint32_t n = std::min(limit, twin_.quiet_limit_as(let_));
+    const uint32_t n = std::min(limit, twin_.quiet_limit_as(jump_let_));
     const bool known = again && others_;
-    const int k = known ? twin_.quiet_or_pid_again(in, n, let_) : twin_.quiet_or_pid(in, n, let_, &others_);
-    sample = k == CoreTwin::kPidClock && let_.sample && !segment_ends();
+    const int k =
+        known ? twin_.quiet_or_pid_again(in, n, jump_let_) : twin_.quiet_or_pid(in, n, jump_let_, &others_);
+    sample = k == CoreTwin::kPidClock && jump_let_.sample && !segment_ends();
     return k == CoreTwin::kQuiet ? n : 0;
   }
   DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
@@ -137,8 +145,9 @@ class TwinCore final : public CoreModel {
   }
   uint32_t skip_edges(const CoreIn& in, uint32_t n, std::vector<CmdChange>& changes, const PinChange* ch,
                       size_t count) override {
-    return twin_.skip_busy_as(in, n, let_, moved_to(changes), ch, count);
+    return twin_.skip_busy_as(in, n, jump_let_, moved_to(changes), ch, count);
   }
+  uint32_t done_in() const override { return twin_.done_in(); }
   CoreOut peek(const CoreIn& /*in*/) const override { return used_outputs(); }
   int32_t cmd(int a) const override { return twin_.interp().pos(a); }
 
@@ -175,7 +184,7 @@ class TwinCore final : public CoreModel {
     }
     return o;
   }
-  CoreTwin::Let let_;
+  CoreTwin::Let let_, jump_let_;
   CoreTwin twin_;
   // What the last quiet_clocks() found of the checks but the PID's.
   mutable bool others_ = false;

@@ -659,8 +659,13 @@ class Machine {
         if (e + fold < edges_.size() && edges_[e + fold].clock < done + q)
           len = uint32_t(edges_[e + fold].clock - done);
         const size_t from = moves_.size();
+        const uint32_t to_done = core_->done_in();
         const uint32_t m = core_->skip_edges(in_, len, moves_, pins_.data(), fold);
         for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
+        // A sample's done inside the stretch: recorded as after a cycled one
+        // (the drive commands hold to the next sweep).
+        if (to_done < m && (at + done + to_done + 1) / k_ >= start_step_)
+          record_sample(at + done + to_done, core_->peek(in_));
         done += m;
         res_.clocks_skipped += m;
         // The pins as the skip left them.
