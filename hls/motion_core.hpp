@@ -253,6 +253,12 @@ class MotionCore {
     // into the sample RAM, its bank published, the saturation flags), the
     // tick alone ending it; done_in() before the skip tells done's clock.
     bool done = false;
+    // With sample and done: a stretch may also go through the tick, which
+    // skip_busy_as() clocks inside it (with the pins as the changes have
+    // them by then; the tick's clock may move the position, and may be
+    // the last), up to the new sweep's first drive command. The sweep
+    // reads the counts and the command of the tick's clock.
+    bool tick = false;
   };
   // Of the clocks from this one, the number of the sweep's done (0: this
   // one), or Pid::kNoDone.
@@ -273,7 +279,7 @@ class MotionCore {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
     const bool others = quiet_but_pid_interp(in, n, let) && interp_quiet(in, n, let.busy);
     if (others_out) *others_out = n > 0 && let.drive && let.busy && others;
-    if (others && pid_.quiet(pi, n, let.sample, through_done(let))) return kQuiet;
+    if (others && pid_quiet(pi, n, let)) return kQuiet;
     // Only the sweep's drive updates (unless let.drive) and a running
     // interpolator's next iteration (unless let.busy) depend on n.
     const bool one = n > 0 && let.drive && let.busy
@@ -290,7 +296,7 @@ class MotionCore {
   // are asked.
   int quiet_or_pid_again(const In& in, uint32_t n, Let let) const {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
-    if (n > 0 && pid_.quiet(pi, n, let.sample, through_done(let))) return kQuiet;
+    if (n > 0 && pid_quiet(pi, n, let)) return kQuiet;
     return pid_.quiet_but_timers(pi) ? kPidClock : 0;
   }
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
@@ -365,14 +371,8 @@ class MotionCore {
   // taken).
   template <typename Moved>
   uint32_t skip_busy_as(const In& in, uint32_t n, Let let, Moved&& moved, const PinChange* ch, size_t count) {
-    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
-      n = ip_.run_for(n, moved);
-      if (n == 0) return 0;
-    } else {
-      skip_interp(n);
-    }
-    skip_others(n, &in, let, ch, count);
-    return n;
+    if (tick_inside(let, n)) return skip_through_tick(in, n, let, moved, ch, count);
+    return skip_stretch(in, n, let, moved, ch, count, 0);
   }
   uint32_t skip_busy(const In& in, uint32_t n) {
     return skip_busy(in, n, [](uint32_t) {});
@@ -391,7 +391,8 @@ class MotionCore {
   // The same, for quiet_as(.., let): drive updates bound it unless
   // let.drive, the next iteration unless let.busy.
   uint32_t quiet_limit_as(Let let) const {
-    uint32_t l = pid_.quiet_limit(through_done(let)) + (let.sample ? 1 : 0);
+    uint32_t l = tick_inside(let, ~0u) ? tick_clocks() + uint32_t(drv_clock(0))
+                                       : pid_.quiet_limit(through_done(let)) + (let.sample ? 1 : 0);
     const int s = pid_.sweep_clock();
     if (s != 0 && !let.drive)
       for (int a = 0; a < NAXES; ++a)
@@ -512,7 +513,7 @@ class MotionCore {
   bool quiet_but_interp(const In& in, uint32_t n, Let let, bool pid_own = false) const {
     const typename Pid::In pi = pid_in(in, nullptr, nullptr);
     return quiet_but_pid_interp(in, n, let) &&
-           (pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_.quiet(pi, n, let.sample, through_done(let)));
+           (pid_own ? n == 1 && pid_.quiet_but_timers(pi) : pid_quiet(pi, n, let));
   }
   // quiet_but_interp() without the PID's own part.
   bool quiet_but_pid_interp(const In& in, uint32_t n, Let let) const {
@@ -543,7 +544,65 @@ class MotionCore {
   }
   // in: the inputs held (needed with let.settle or let.drive), but for the
   // pins that ch changes (let.settle).
-  void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0) {
+  // A stretch without the tick; ch's clocks count from `from`.
+  template <typename Moved>
+  uint32_t skip_stretch(const In& in, uint32_t n, Let let, Moved&& moved, const PinChange* ch, size_t count,
+                        uint32_t from) {
+    if (ip_.state() == InterpCore<FIFO_AW>::ST_RUN) {
+      n = ip_.run_for(n, moved);
+      if (n == 0) return 0;
+    } else {
+      skip_interp(n);
+    }
+    skip_others(n, &in, let, ch, count, from);
+    return n;
+  }
+  // Clocks before the tick's (0: this one is).
+  uint32_t tick_clocks() const { return pid_.tick() ? 0 : pid_.timer(); }
+  // A stretch of n clocks under let would go through the tick (n ~0u:
+  // some stretch could).
+  bool tick_inside(Let let, uint32_t n) const {
+    return let.tick && through_done(let) && !pid_.tick() && tick_clocks() < n;
+  }
+  // The PID's part of the checks: through the tick (its port idle, the
+  // stretch ending before the new sweep's first drive command), else the
+  // timers' bound.
+  bool pid_quiet(const typename Pid::In& pi, uint32_t n, Let let) const {
+    if (tick_inside(let, n))
+      return pid_.quiet_but_timers(pi) && !pid_.rvalid() && n <= tick_clocks() + uint32_t(drv_clock(0));
+    return pid_.quiet(pi, n, let.sample, through_done(let));
+  }
+  // skip_busy_as() through the tick: the stretch before it, the tick's
+  // clock clocked with the pins the changes give it, the stretch after.
+  template <typename Moved>
+  uint32_t skip_through_tick(const In& in, uint32_t n, Let let, Moved& moved, const PinChange* ch,
+                             size_t count) {
+    const uint32_t t = tick_clocks();
+    size_t k = 0;
+    while (k < count && ch[k].clock < t) ++k;
+    if (const uint32_t m = t > 0 ? skip_stretch(in, t, let, moved, ch, k, 0) : 0; m < t) return m;
+    if (ip_.ending()) return t;
+    In at = in;
+    for (k = 0; k < count && ch[k].clock <= t; ++k) {
+      at.enc_a[ch[k].axis] = ch[k].a;
+      at.enc_b[ch[k].axis] = ch[k].b;
+      at.enc_z[ch[k].axis] = ch[k].z;
+    }
+    int32_t was[NAXES];
+    for (int a = 0; a < NAXES; ++a) was[a] = ip_.pos(a);
+    clock(at);
+    for (int a = 0; a < NAXES; ++a)
+      if (ip_.pos(a) != was[a]) {
+        moved(t + 1);
+        break;
+      }
+    if (n == t + 1) return n;
+    const auto after = [&moved, t](uint32_t i) { moved(t + 1 + i); };
+    return t + 1 + skip_stretch(at, n - t - 1, let, after, ch + k, count - k, t + 1);
+  }
+  // ch's clocks count from `from` (the stretch's first clock).
+  void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0,
+                   uint32_t from = 0) {
     if (let.drive) skip_drive(n, *in);
     // The port reads the published bank as the last clock found it: done
     // swaps it at its edge (let.done).
@@ -556,10 +615,10 @@ class MotionCore {
       if (let.settle) {
         QuadIn qi = quad_in(*in, a, false);
         uint32_t t = 0;
-        for (size_t i = 0; i < count && ch[i].clock < n; ++i) {
+        for (size_t i = 0; i < count && ch[i].clock - from < n; ++i) {
           if (ch[i].axis != a) continue;
-          dec_[a].skip_settling(qi, ch[i].clock - t);
-          t = ch[i].clock;
+          dec_[a].skip_settling(qi, ch[i].clock - from - t);
+          t = ch[i].clock - from;
           qi.a = ch[i].a;
           qi.b = ch[i].b;
           qi.z = ch[i].z;

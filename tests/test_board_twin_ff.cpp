@@ -430,7 +430,10 @@ struct CoreFeed {
 // (inside a stretch, at the clock done_in() told before it). Ts
 // = 52 clocks is the latency itself: the tick and done at one edge.
 TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
-  const Core::Let all{false, true, true, true, true, true};
+  // Jumps through the tick, and jumps that clock it (the looks again
+  // between the stretches).
+  const Core::Let through{false, true, true, true, true, true, true},
+      to_tick{false, true, true, true, true, true};
   for (const uint32_t ts : {52u, 53u, 200u, 1207u}) {
     std::mt19937_64 rng(ts);
     SegGen gen = core_segments(ts);
@@ -441,7 +444,8 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     in.enc_filt[1] = 3;
     CoreFeed feed{gen, {0, 0, 0}, {}};
     int64_t count[2] = {};
-    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0, agains = 0, inside = 0;
+    uint64_t jumps = 0, changes = 0, cycled = 0, samples = 0, held = 0, looks = 0, agains = 0, inside = 0,
+             ticks = 0;
     for (uint64_t clock = 0; clock < 150'000; ++clock) {
       feed.word(rng, ref, in);
       if (rng() % 20'000 == 0)
@@ -454,6 +458,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
       if (rng() % 500 == 0) in.smp_raddr = uint8_t(rng() % 32);
       walk_encoders(rng, in, count, 20, 5000);
       if (rng() % 97 == 0) {
+        const Core::Let all = jumps % 2 == 0 ? through : to_tick;
         // The inputs a jump holds: no segment word, strobe or override write.
         Core::In h = in;
         h.seg_wr = false;
@@ -492,7 +497,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
           // quiet_or_pid() is the two looks at once, with this Let and
           // with those whose checks depend on the stretch's length.
           for (const Core::Let let :
-               {all, Core::Let{false, true, true, false, true, true},
+               {through, to_tick, Core::Let{false, true, true, false, true, true},
                 Core::Let{false, false, true, true, true}, Core::Let{false, true, true, true, true}}) {
             const uint32_t l = std::min(n - did, fast.quiet_limit_as(let));
             ASSERT_EQ(fast.quiet_or_pid(h, l, let), l > 0 && fast.quiet_as(h, l, let) ? Core::kQuiet
@@ -503,12 +508,13 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
           }
           if (q > 0 && fast.quiet_as(h, q, all)) {
             // Done's clock, when the stretch goes through it.
-            const uint32_t d = fast.done_in();
+            const uint32_t d = fast.done_in(), t = fast.pid().tick() ? 0 : fast.pid().timer();
             const uint32_t m = fast.skip_busy_as(h, q, all, [](uint32_t) {});
             if (d < m) {
               fast_done.push_back(did + d);
               ++inside;
             }
+            ticks += t < m;
             did += m;
             if (m > 0) continue;
           }
@@ -538,10 +544,10 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     }
     std::printf(
         "Ts %u: %llu jumps over %llu clocks, %llu drive updates inside, %llu clocks cycled, %llu samples, "
-        "%llu looks, %llu looks again, %llu dones inside stretches\n",
+        "%llu looks, %llu looks again, %llu dones and %llu ticks inside stretches\n",
         ts, (unsigned long long)jumps, (unsigned long long)held, (unsigned long long)changes,
         (unsigned long long)cycled, (unsigned long long)samples, (unsigned long long)looks,
-        (unsigned long long)agains, (unsigned long long)inside);
+        (unsigned long long)agains, (unsigned long long)inside, (unsigned long long)ticks);
     EXPECT_GT(jumps, 1000u);
     // Ts = latency: the tick and done at one edge, which ends a stretch.
     if (ts > 52) {
@@ -549,7 +555,8 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
     }
     EXPECT_GT(changes, 30u);
     EXPECT_GT(samples, 30u);
-    EXPECT_GT(agains, 200u);
+    EXPECT_GT(agains, 100u);
+    EXPECT_GT(ticks, 20u);
   }
 }
 
@@ -562,7 +569,7 @@ TEST(InterpTwinFastForward, JumpsThroughSamplesEqualClocks) {
 // and the clocks of done must be clocking's.
 TEST(InterpTwinFastForward, JumpsTakeEdgesAsClocks) {
   using PinChange = Core::PinChange;
-  const Core::Let all{false, true, true, true, true, true};
+  const Core::Let all{false, true, true, true, true, true, true};
   for (const uint32_t ts : {52u, 200u, 1207u}) {
     std::mt19937_64 rng(ts + 1);
     SegGen gen = core_segments(ts);

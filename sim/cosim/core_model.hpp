@@ -103,12 +103,12 @@ class CoreModel {
 
 // drive: skips may go through the sweep's drive updates (a user that
 // integrates the drive value over a skip from Skipped::drive) and end with
-// the edge before a PID sample's tick or done (a jump's, through done:
+// the edge before a PID sample's tick or done (a jump's go through both:
 // quiet_clocks() with `sample` and skip_edges()); else they end before each.
 class TwinCore final : public CoreModel {
  public:
   explicit TwinCore(bool drive = false)
-      : let_{false, true, true, drive, drive}, jump_let_{false, true, true, drive, drive, drive} {}
+      : let_{false, true, true, drive, drive}, jump_let_{false, true, true, drive, drive, drive, drive} {}
   CoreOut cycle(const CoreIn& in) override {
     const CoreOut o = used_outputs();
     twin_.clock(in);
