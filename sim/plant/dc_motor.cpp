@@ -159,6 +159,10 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
   };
   while (taken < n) {
     // A stretch of a step or two is taken by step(): cheaper than a search.
+    // A longer one on a new input starts its run here, as step() would (the
+    // search then covers its first step too).
+    if (monotone_runs_ && n - taken >= kSearchFrom && (!anchored_ || v != v_ || k_ == kRun))
+      anchor(v, x_(1) > 0 ? 1.0 : -1.0);
     if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun && n - taken >= kSearchFrom) {
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
