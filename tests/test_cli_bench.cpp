@@ -38,6 +38,7 @@ TEST(CliBench, QuickRunWritesReportCsvAndPlots) {
   EXPECT_NE(md.find("## job, tuned gains, without and with feed-forward"), std::string::npos);
   EXPECT_NE(md.find("| job, RMS contour error |"), std::string::npos);
   EXPECT_NE(md.find("The goal's case, the two-axis circle at 100 us on the twin: "), std::string::npos);
+  EXPECT_NE(md.find("Run alone after the pool, 5 times (same gains"), std::string::npos);
   EXPECT_EQ(md.find("| **yes** |"), std::string::npos) << "a job's queue ran dry";
   EXPECT_NE(r.out.find("## Reading"), std::string::npos);
   for (const char* png : {"following_step_same.png", "circle_xy_tuned.png", "contour_vs_ts.png",

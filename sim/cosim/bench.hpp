@@ -70,6 +70,12 @@ struct BenchResult {
   std::vector<RtlCheck> rtl_checks;
   std::vector<SpeedRow> other_speeds;
   KernelProbe probe;
+  // The goal's case (the circle at 100 us, same gains, on the twin) run
+  // alone after the pool, kGoalAloneRuns times: in the pool it shares the
+  // machine's cores with another run.
+  static constexpr int kGoalAloneRuns = 5;
+  double goal_alone_sim_s = 0;
+  std::vector<double> goal_alone_wall_s;
   double wall_s = 0;
 };
 
