@@ -391,8 +391,7 @@ class MotionCore {
   // The same, for quiet_as(.., let): drive updates bound it unless
   // let.drive, the next iteration unless let.busy.
   uint32_t quiet_limit_as(Let let) const {
-    uint32_t l = tick_inside(let, ~0u) ? tick_clocks() + uint32_t(drv_clock(0))
-                                       : pid_.quiet_limit(through_done(let)) + (let.sample ? 1 : 0);
+    uint32_t l = passes_tick(let) ? tick_limit() : pid_.quiet_limit(through_done(let)) + (let.sample ? 1 : 0);
     const int s = pid_.sweep_clock();
     if (s != 0 && !let.drive)
       for (int a = 0; a < NAXES; ++a)
@@ -542,8 +541,6 @@ class MotionCore {
       ip_still_ = n < 2 ? uint8_t(ip_still_ + n) : 2;
     }
   }
-  // in: the inputs held (needed with let.settle or let.drive), but for the
-  // pins that ch changes (let.settle).
   // A stretch without the tick; ch's clocks count from `from`.
   template <typename Moved>
   uint32_t skip_stretch(const In& in, uint32_t n, Let let, Moved&& moved, const PinChange* ch, size_t count,
@@ -557,19 +554,17 @@ class MotionCore {
     skip_others(n, &in, let, ch, count, from);
     return n;
   }
-  // Clocks before the tick's (0: this one is).
-  uint32_t tick_clocks() const { return pid_.tick() ? 0 : pid_.timer(); }
-  // A stretch of n clocks under let would go through the tick (n ~0u:
-  // some stretch could).
-  bool tick_inside(Let let, uint32_t n) const {
-    return let.tick && through_done(let) && !pid_.tick() && tick_clocks() < n;
-  }
+  // Stretches under let may go through the tick, which is not this clock:
+  // it comes after pid_.timer() clocks.
+  bool passes_tick(Let let) const { return let.tick && through_done(let) && !pid_.tick(); }
+  // The longest of them: up to the new sweep's first drive command.
+  uint32_t tick_limit() const { return pid_.timer() + uint32_t(drv_clock(0)); }
+  // A stretch of n clocks under let goes through the tick.
+  bool tick_inside(Let let, uint32_t n) const { return passes_tick(let) && pid_.timer() < n; }
   // The PID's part of the checks: through the tick (its port idle, the
-  // stretch ending before the new sweep's first drive command), else the
-  // timers' bound.
+  // stretch within tick_limit()), else the timers' bound.
   bool pid_quiet(const typename Pid::In& pi, uint32_t n, Let let) const {
-    if (tick_inside(let, n))
-      return pid_.quiet_but_timers(pi) && !pid_.rvalid() && n <= tick_clocks() + uint32_t(drv_clock(0));
+    if (tick_inside(let, n)) return pid_.quiet_but_timers(pi) && !pid_.rvalid() && n <= tick_limit();
     return pid_.quiet(pi, n, let.sample, through_done(let));
   }
   // skip_busy_as() through the tick: the stretch before it, the tick's
@@ -577,7 +572,7 @@ class MotionCore {
   template <typename Moved>
   uint32_t skip_through_tick(const In& in, uint32_t n, Let let, Moved& moved, const PinChange* ch,
                              size_t count) {
-    const uint32_t t = tick_clocks();
+    const uint32_t t = pid_.timer();
     size_t k = 0;
     while (k < count && ch[k].clock < t) ++k;
     if (const uint32_t m = t > 0 ? skip_stretch(in, t, let, moved, ch, k, 0) : 0; m < t) return m;
@@ -600,7 +595,9 @@ class MotionCore {
     const auto after = [&moved, t](uint32_t i) { moved(t + 1 + i); };
     return t + 1 + skip_stretch(at, n - t - 1, let, after, ch + k, count - k, t + 1);
   }
-  // ch's clocks count from `from` (the stretch's first clock).
+  // in: the inputs held (needed with let.settle or let.drive), but for the
+  // pins that ch changes (let.settle), whose clocks count from `from` (the
+  // stretch's first clock).
   void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0,
                    uint32_t from = 0) {
     if (let.drive) skip_drive(n, *in);

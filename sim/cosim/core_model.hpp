@@ -52,14 +52,15 @@ class CoreModel {
   // the position command of a running segment (0: none; the RTL never
   // skips).
   virtual uint32_t quiet_clocks(const CoreIn& /*in*/, uint32_t /*limit*/) const { return 0; }
-  // The same, and where it gives 0, whether this clock is one that
-  // sample_clock() tells (for the checks of one). again: in is what the
-  // last call was given, and only skip() and cycle() with it came since
-  // (the twin then asks only what those can change).
+  // The same for a jump's skips, and where it gives 0, whether this clock
+  // is not quiet only because it is the PID's or the sample port's
+  // (CoreTwin::Let::sample) and leaves the interpolator's segment running,
+  // so that a jump cycles it (the twin; for the checks of one). again: in
+  // is what the last call was given, and only skip() and cycle() with it
+  // came since (the twin then asks only what those can change).
   virtual uint32_t quiet_clocks(const CoreIn& in, uint32_t limit, bool& sample, bool /*again*/) const {
-    const uint32_t q = quiet_clocks(in, limit);
-    sample = q == 0 && sample_clock(in);
-    return q;
+    sample = false;
+    return quiet_clocks(in, limit);
   }
   // Up to n of those clocks at once: returns how many it did (it stops
   // before a segment ends) and, unless first is null, the outputs and PWM
@@ -86,16 +87,12 @@ class CoreModel {
   // ... and over how many clocks from this one, skips and sample clocks
   // alike: up to the next sample's first drive update.
   virtual uint32_t known_drive_clocks() const { return 0; }
-  // This clock is not quiet only because it is the PID's or the sample
-  // port's (CoreTwin::Let::sample), and leaves the interpolator's segment
-  // running: a jump cycles it (the twin).
-  virtual bool sample_clock(const CoreIn& /*in*/) const { return false; }
   // This clock ends the running segment (the twin).
   virtual bool segment_ends() const { return false; }
   // The clocks from this one to the PID's done (0: this one), kNoDone with
   // no sweep under way: a jump's skips go through done (the twin), the
   // sample's outputs then recorded from after the skip.
-  static constexpr uint32_t kNoDone = ~0u;
+  static constexpr uint32_t kNoDone = CoreTwin::Pid::kNoDone;
   virtual uint32_t done_in() const { return kNoDone; }
   // The position command now (the twin; after a skip).
   virtual int32_t cmd(int /*a*/) const { return 0; }
@@ -128,9 +125,6 @@ class TwinCore final : public CoreModel {
   }
   DriveSteps drive_steps(const CoreIn& in, int a) const override { return twin_.drive_steps(in, a); }
   uint32_t known_drive_clocks() const override { return twin_.known_drive_clocks(); }
-  bool sample_clock(const CoreIn& in) const override {
-    return let_.sample && twin_.quiet_but_pid(in, let_) && !segment_ends();
-  }
   bool segment_ends() const override { return twin_.interp().ending(); }
   uint32_t skip(const CoreIn& in, uint32_t n, Skipped* first, std::vector<CmdChange>& changes) override {
     if (first) {
