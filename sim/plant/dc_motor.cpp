@@ -117,7 +117,7 @@ double AxisPlant::driving_torque_nm() const {
 
 void AxisPlant::step(double v) {
   ++steps_;
-  if (!anchored_ || v != v_ || k_ == kRun) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
+  if (!in_run(v)) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
   if (friction_ && stuck_) {
     const double drive = driving_torque_nm();
     if (std::fabs(drive) <= m_.stiction_nm) {
@@ -161,9 +161,8 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     // A stretch of a step or two is taken by step(): cheaper than a search.
     // A longer one on a new input starts its run here, as step() would (the
     // search then covers its first step too).
-    if (monotone_runs_ && n - taken >= kSearchFrom && (!anchored_ || v != v_ || k_ == kRun))
-      anchor(v, x_(1) > 0 ? 1.0 : -1.0);
-    if (monotone_runs_ && anchored_ && v == v_ && k_ < kRun && n - taken >= kSearchFrom) {
+    if (monotone_runs_ && n - taken >= kSearchFrom) {
+      if (!in_run(v)) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
       const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
@@ -231,18 +230,15 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   // event holds it holds to the piece's end, and a bisection finds the first.
   const uint32_t lo = k_, hi = k_ + lim;
   const uint32_t turn = last_of_sign(lo, hi, accel);
-  if (turn == hi && friction_) {
-    // One piece, the case of almost every stretch: its end tells.
-    return lim == 0 || !event_at(hi, count) ? lim : first_event(lo, hi, count) - 1 - lo;
-  }
   uint32_t cuts[4];
   int n = 0;
-  for (const auto& [a, b] : {std::pair{lo, turn}, std::pair{std::min(turn + 1, hi), hi}}) {
-    if (n > 0 && a == cuts[n - 1]) continue;  // no second piece
+  const auto piece = [&](uint32_t a, uint32_t b) {
     const uint32_t cross = friction_ ? b : last_of_sign(a, b, speed);
     if (cross != b) cuts[n++] = cross;
     cuts[n++] = b;
-  }
+  };
+  piece(lo, turn);
+  if (turn < hi) piece(turn + 1, hi);
   uint32_t from = lo;  // no event here
   for (int i = 0; i < n; ++i) {
     const uint32_t to = cuts[i];

@@ -130,6 +130,8 @@ class AxisPlant {
   // A new run from the current state with this input; the shaft moves in
   // direction dir (friction), or is stuck.
   void anchor(double volts, double dir);
+  // The current run goes on with this input (else a step anchors anew).
+  bool in_run(double volts) const { return anchored_ && volts == v_ && k_ < kRun; }
   // State i (0 current, 1 speed, 2 angle) of a run: row i of Ad^k x0 +
   // Bd_k u0 (p: k's powers). The sums go in the order Eigen's product takes
   // them (the figures the plant gave before it was read by rows), and every
