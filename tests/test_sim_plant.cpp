@@ -334,7 +334,7 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
     }
   };
   std::mt19937_64 rng(seed);
-  uint64_t stops = 0, count_mismatch = 0, total = 0, moved = 0;
+  uint64_t stops = 0, count_mismatch = 0, total = 0, moved = 0, passed = 0;
   double hold_s = 0;
   double worst = 0;
   for (int s = 0; s < stretches; ++s) {
@@ -355,7 +355,15 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       const bool sampled = rng() % 2 == 0;
       std::vector<double> samples(sampled && n - done >= first ? (n - done - first) / every + 1 : 0);
       AxisPlant::Samples out{first, every, samples.data(), samples.size()};
-      const uint64_t took = sampled ? held.hold(v, n - done, out) : held.hold(v, n - done);
+      // A third of the holds go through the count changes, noting each.
+      const bool counting = rng() % 3 == 0;
+      const uint64_t step0 = rng() % 1000;
+      std::vector<AxisPlant::CountChange> changes;
+      AxisPlant::Held h{0, false};
+      if (counting) h = held.hold_counting(v, n - done, out, changes, step0);
+      const uint64_t took = counting  ? h.steps
+                            : sampled ? held.hold(v, n - done, out)
+                                      : held.hold(v, n - done);
       samples.resize(samples.size() - out.room);
       ASSERT_EQ(out.out, samples.data() + samples.size());
       if (sampled && n - done >= first) {
@@ -367,10 +375,26 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       total += took;
       ASSERT_GE(took, 1u);
       ASSERT_LE(took, n - done);
-      size_t sample = 0;
+      size_t sample = 0, change = 0;
+      int64_t last = before;
       for (uint64_t k = 0; k < took; ++k) {
-        ASSERT_EQ(stepped.encoder_count(), before) << "stretch " << s << ": hold() passed a count change";
+        if (!counting) {
+          ASSERT_EQ(stepped.encoder_count(), before) << "stretch " << s << ": hold() passed a count change";
+        }
         stepped.step(v);
+        if (counting && stepped.encoder_count() != last) {
+          // Every change noted, with its step, and none passed that moved
+          // the count by more than one.
+          ASSERT_LT(change, changes.size()) << "stretch " << s << ", step " << k + 1 << ": a change missing";
+          ASSERT_EQ(changes[change].step, step0 + k + 1) << "stretch " << s;
+          ASSERT_EQ(changes[change].count, stepped.encoder_count()) << "stretch " << s;
+          ++change;
+          const int64_t d = stepped.encoder_count() - last;
+          last = stepped.encoder_count();
+          ASSERT_TRUE(d == 1 || d == -1 || k + 1 == took) << "stretch " << s << ": went on after " << d;
+          ASSERT_EQ(h.big, d != 1 && d != -1) << "stretch " << s;
+          if (k + 1 < took) ++passed;
+        }
         if (sampled && k + 1 >= first && (k + 1 - first) % every == 0) {
           ASSERT_LT(sample, samples.size()) << "stretch " << s << ": a sample missing";
           ASSERT_EQ(samples[sample++], stepped.position_m()) << "stretch " << s << ", step " << k + 1;
@@ -384,7 +408,11 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
           ++count_mismatch;
       }
       ASSERT_EQ(sample, samples.size()) << "stretch " << s << ": samples past the steps taken";
-      if (took < n - done) {
+      ASSERT_EQ(change, changes.size()) << "stretch " << s << ": a change noted that did not happen";
+      if (counting && took < n - done) {
+        ASSERT_TRUE(h.big) << "stretch " << s << ": hold_counting() stopped short without a big change";
+        ++stops;
+      } else if (took < n - done) {
         ASSERT_NE(held.encoder_count(), before)
             << "stretch " << s << ": hold() stopped without a count change";
         ++stops;
@@ -407,13 +435,16 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
                       std::fabs(ref(1) - stepped.speed_rad_s()) / std::max(1.0, std::fabs(ref(1)))});
   }
   std::printf(
-      "%s, friction %d: %d stretches, %llu steps, %llu stops at a count change, worst relative "
+      "%s, friction %d: %d stretches, %llu steps, %llu stops at a count change, %llu changes passed, "
+      "worst relative "
       "difference from the iterated ZOH %.2g, %llu steps with another count beyond rounding; "
       "hold() %.2f ns per step\n",
       cfg.motor.l_h > 1e-3 ? "complex poles" : "default axis", friction, stretches, (unsigned long long)total,
-      (unsigned long long)stops, worst, (unsigned long long)count_mismatch, hold_s * 1e9 / double(total));
+      (unsigned long long)stops, (unsigned long long)passed, worst, (unsigned long long)count_mismatch,
+      hold_s * 1e9 / double(total));
   EXPECT_GT(stops, 100u);
   EXPECT_GT(moved, 100u);
+  EXPECT_GT(passed, 100u);  // hold_counting() went on through changes
   EXPECT_LT(worst, 1e-9);
   EXPECT_EQ(count_mismatch, 0u);
 }

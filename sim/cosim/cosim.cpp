@@ -706,21 +706,18 @@ class Machine {
   }
 
   // A count an axis reached at the end of a step of a jump (from 1).
-  struct StepCount {
-    uint64_t step;
-    int64_t count;
-  };
-  // Steps s0 + 1 .. n (from 1) of a skip that sk.drive describes, as the
-  // clock path takes them (each step on the mean of its clocks' volts,
-  // StepVolts), up to n or the first that changes the count; positions
-  // sampled along the way written through out (AxisPlant::Samples, its
-  // first counted from step s0), which moves on past them. Returns the last
-  // step taken.
-  uint64_t hold_driven(AxisPlant& p, int a, const Skipped& sk, uint64_t s0, uint64_t n,
-                       AxisPlant::Samples& out) {
+  using StepCount = AxisPlant::CountChange;
+  // Up to n steps of a skip that sk.drive describes, as the clock path
+  // takes them (each step on the mean of its clocks' volts, StepVolts),
+  // through the count changes: each count reached goes in counts with its
+  // step. Ends at n or after a step that brings more than one new count.
+  // Positions sampled along the way are written through out
+  // (AxisPlant::Samples). Returns the last step taken.
+  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, AxisPlant::Samples out,
+                         std::vector<StepCount>& counts) {
+    counts.clear();
     const DriveSteps& ds = sk.drive[a];
-    const int64_t count = p.encoder_count();
-    uint64_t s = s0;
+    uint64_t s = 0;
     while (s < n) {
       const uint64_t c0 = s * k_;
       // The next clock with another drive value.
@@ -738,29 +735,9 @@ class Machine {
         v = averaged_volts(a, ds.at(c0));
         len = std::min(n, next / k_) - s;
       }
-      const uint64_t t = p.hold(v, len, out);
-      s += t;
-      // hold() counts from its own start: a piece that ends on the change
-      // takes all its steps.
-      if (t < len || p.encoder_count() != count) break;
-    }
-    return s;
-  }
-
-  // Up to n steps of hold_driven(), through the count changes: each count
-  // reached goes in *counts with its step. Ends at n or after a step that
-  // brings more than one new count. Returns the last step taken.
-  uint64_t hold_counting(AxisPlant& p, int a, const Skipped& sk, uint64_t n, AxisPlant::Samples out,
-                         std::vector<StepCount>& counts) {
-    counts.clear();
-    uint64_t s = 0;
-    while (s < n) {
-      const int64_t before = p.encoder_count();
-      s = hold_driven(p, a, sk, s, n, out);
-      const int64_t now = p.encoder_count();
-      if (now == before) break;
-      counts.push_back(StepCount{s, now});
-      if (now - before > 1 || now - before < -1) break;
+      const AxisPlant::Held h = p.hold_counting(v, len, out, counts, s);
+      s += h.steps;
+      if (h.big) break;
     }
     return s;
   }

@@ -107,6 +107,7 @@ void AxisPlant::anchor(double v, double dir) {
   v_ = v;
   dir_ = dir;
   k_ = 0;
+  ++runs_;
   anchored_ = true;
   u0_ = Eigen::Vector2d(v, tau_load_ + (friction_ && !stuck_ ? dir * m_.coulomb_nm : 0.0));
 }
@@ -144,7 +145,17 @@ uint64_t AxisPlant::hold(double v, uint64_t n) {
 }
 
 uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
-  const int64_t count = encoder_count();
+  return hold_through(v, n, samples, nullptr, 0).steps;
+}
+
+AxisPlant::Held AxisPlant::hold_counting(double v, uint64_t n, Samples& samples,
+                                         std::vector<CountChange>& changes, uint64_t step0) {
+  return hold_through(v, n, samples, &changes, step0);
+}
+
+AxisPlant::Held AxisPlant::hold_through(double v, uint64_t n, Samples& samples,
+                                        std::vector<CountChange>* changes, uint64_t step0) {
+  int64_t count = encoder_count();
   uint64_t taken = 0;
   uint64_t next = samples.out ? samples.first : n + 1;  // the next sampled step of the call
   // The trace's slots for the next `records` sampled steps, its room
@@ -157,6 +168,13 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     next += records * samples.every;
     return at;
   };
+  // The pieces of the run the search is in, found once per run: a count
+  // change goes on in the same run, up to the same last step (k_ and
+  // taken move together), so the pieces from its start still hold.
+  Pieces cut{};
+  uint64_t cut_run = 0;
+  bool cut_set = false;
+  bool big = false;
   while (taken < n) {
     // A stretch of a step or two is taken by step(): cheaper than a search.
     // A longer one on a new input starts its run here, as step() would (the
@@ -165,7 +183,17 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
       if (!in_run(v)) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
       const bool stuck = friction_ && stuck_;
-      const uint32_t quiet = stuck ? steps_before_breakaway(lim) : steps_before_event(lim, count);
+      uint32_t quiet;
+      if (stuck) {
+        quiet = steps_before_breakaway(lim);
+      } else {
+        if (!cut_set || cut_run != runs_) {
+          cut = pieces(k_, k_ + lim);
+          cut_run = runs_;
+          cut_set = true;
+        }
+        quiet = steps_before_event(cut, count);
+      }
       if (quiet > 0 && next <= taken + quiet) {
         // Samples inside the quiet stretch, from the run (a stuck shaft
         // stands where it is).
@@ -192,10 +220,16 @@ uint64_t AxisPlant::hold(double v, uint64_t n, Samples& samples) {
     step(v);
     ++taken;
     if (next == taken) *take(1) = position_m();
-    if (encoder_count() != count) break;
+    if (const int64_t now = encoder_count(); now != count) {
+      if (!changes) break;
+      changes->push_back(CountChange{step0 + taken, now});
+      big = now - count > 1 || now - count < -1;
+      count = now;
+      if (big) break;
+    }
   }
   if (samples.out) samples.first = next - taken;
-  return taken;
+  return Held{taken, big};
 }
 
 namespace {
@@ -219,7 +253,7 @@ uint32_t last_of_sign(uint32_t lo, uint32_t hi, F f) {
 
 }  // namespace
 
-uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
+AxisPlant::Pieces AxisPlant::pieces(uint32_t lo, uint32_t hi) const {
   const auto accel = [&](uint32_t j) {
     return m_.kt_nm_per_a * run_x(j, 0) - m_.b_nm_s_per_rad * run_x(j, 1) - u0_(1);
   };
@@ -228,28 +262,33 @@ uint32_t AxisPlant::steps_before_event(uint32_t lim, int64_t count) const {
   // acceleration changes sign) and, without friction, of one sign (split
   // where it crosses zero): on each the angle is monotone too, so once an
   // event holds it holds to the piece's end, and a bisection finds the first.
-  const uint32_t lo = k_, hi = k_ + lim;
   const uint32_t turn = last_of_sign(lo, hi, accel);
-  uint32_t cuts[4];
-  int n = 0;
+  Pieces p{};
   const auto piece = [&](uint32_t a, uint32_t b) {
     const uint32_t cross = friction_ ? b : last_of_sign(a, b, speed);
-    if (cross != b) cuts[n++] = cross;
-    cuts[n++] = b;
+    if (cross != b) p.cut[p.n++] = cross;
+    p.cut[p.n++] = b;
   };
   piece(lo, turn);
   if (turn < hi) piece(turn + 1, hi);
-  uint32_t from = lo;  // no event here
-  for (int i = 0; i < n; ++i) {
-    const uint32_t to = cuts[i];
-    if (to == from) continue;
-    if (event_at(to, count)) return first_event(from, to, count) - 1 - lo;
-    from = to;
-  }
-  return lim;
+  return p;
 }
 
-uint32_t AxisPlant::first_event(uint32_t from, uint32_t to, int64_t count) const {
+uint32_t AxisPlant::steps_before_event(const Pieces& p, int64_t count) const {
+  uint32_t from = k_;  // no event here
+  for (int i = 0; i < p.n; ++i) {
+    const uint32_t to = p.cut[i];
+    if (to <= from) continue;
+    // The speed is monotone over the piece and of the motion's sign at
+    // `from`: friction can stop the shaft inside only if it has at `to`.
+    const bool stops = friction_ && run_x(to, 1) * dir_ <= 0;
+    if (stops || count_at(run_x(to, 2)) != count) return first_event(from, to, count, stops) - 1 - k_;
+    from = to;
+  }
+  return p.cut[p.n - 1] - k_;
+}
+
+uint32_t AxisPlant::first_event(uint32_t from, uint32_t to, int64_t count, bool stops) const {
   // The step at which the speed at `from` would reach the next count is
   // most often the event's or next to it: probed with its neighbour first,
   // it narrows what the bisection has left. Both keep the first step with
@@ -259,17 +298,17 @@ uint32_t AxisPlant::first_event(uint32_t from, uint32_t to, int64_t count) const
   const double ahead = per_step != 0 ? (edge - run_x(from, 2)) / per_step : -1;
   if (ahead > 0 && ahead < double(to - from - 1)) {
     const uint32_t g = from + std::max<uint32_t>(1, uint32_t(std::ceil(ahead)));
-    if (event_at(g, count)) {
+    if (event_at(g, count, stops)) {
       to = g;
-      if (to - from > 1) (event_at(g - 1, count) ? to : from) = g - 1;
+      if (to - from > 1) (event_at(g - 1, count, stops) ? to : from) = g - 1;
     } else {
       from = g;
-      if (to - from > 1) (event_at(g + 1, count) ? to : from) = g + 1;
+      if (to - from > 1) (event_at(g + 1, count, stops) ? to : from) = g + 1;
     }
   }
   while (to - from > 1) {
     const uint32_t mid = from + (to - from) / 2;
-    (event_at(mid, count) ? to : from) = mid;
+    (event_at(mid, count, stops) ? to : from) = mid;
   }
   return to;
 }

@@ -58,6 +58,21 @@ class AxisPlant {
     size_t room = 0;
   };
   uint64_t hold(double terminal_volts, uint64_t n, Samples& samples);
+  // The same through the count changes: each step at whose end the count
+  // differs from the step before goes to `changes`, its step numbered from
+  // step0 + 1. Stops after n steps, or after a step that moves the count by
+  // more than one (big then). One call takes a whole window with the
+  // search's pieces found once, where hold() would start again at each.
+  struct CountChange {
+    uint64_t step;
+    int64_t count;
+  };
+  struct Held {
+    uint64_t steps;
+    bool big;
+  };
+  Held hold_counting(double terminal_volts, uint64_t n, Samples& samples, std::vector<CountChange>& changes,
+                     uint64_t step0 = 0);
   // The motion of o, a copy of this plant (the same axis): its state, run
   // and friction, for much less than a copy of the whole model.
   void take_motion(const AxisPlant& o) {
@@ -154,18 +169,31 @@ class AxisPlant {
     for (uint64_t i = 0; i < count; ++i) out[i] = run_row(pk[k + i * every], 2, x0, u0) * to_m;
   }
   double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
-  // Of the next lim steps of the run, how many end without an event (a
-  // count other than `count`, or friction stopping the shaft); how many
-  // stuck steps come before the breakaway.
-  uint32_t steps_before_event(uint32_t lim, int64_t count) const;
-  // An event at step j of the run: a count other than `count`, or friction
-  // stopping the shaft.
-  bool event_at(uint32_t j, int64_t count) const {
-    return (friction_ && run_x(j, 1) * dir_ <= 0) || count_at(run_x(j, 2)) != count;
+  // hold() and hold_counting(): with changes, through the count changes.
+  Held hold_through(double volts, uint64_t n, Samples& samples, std::vector<CountChange>* changes,
+                    uint64_t step0);
+  // Steps lo .. hi of the run cut into pieces on which the angle is
+  // monotone: each piece ends at a cut (ascending, the last hi).
+  struct Pieces {
+    uint32_t cut[4];
+    int n;
+  };
+  Pieces pieces(uint32_t lo, uint32_t hi) const;
+  // Of the steps from k_ to the last cut of p (pieces of this run from at
+  // most k_ on), how many end without an event (a count other than
+  // `count`, or friction stopping the shaft); how many stuck steps come
+  // before the breakaway.
+  uint32_t steps_before_event(const Pieces& p, int64_t count) const;
+  // An event at step j of the run: a count other than `count`, or (stops)
+  // friction stopping the shaft.
+  bool event_at(uint32_t j, int64_t count, bool stops) const {
+    return (stops && run_x(j, 1) * dir_ <= 0) || count_at(run_x(j, 2)) != count;
   }
   // The first step of from + 1 .. to with the event, which `to` has and
   // `from` has not, on a piece of the run where the angle is monotone.
-  uint32_t first_event(uint32_t from, uint32_t to, int64_t count) const;
+  // Without stops the speed keeps its sign over the piece: only the count
+  // can change.
+  uint32_t first_event(uint32_t from, uint32_t to, int64_t count, bool stops) const;
   // Stretches shorter than this go by step().
   static constexpr uint64_t kSearchFrom = 3;
   uint32_t steps_before_breakaway(uint32_t lim) const;
@@ -187,6 +215,7 @@ class AxisPlant {
   Eigen::Vector2d u0_ = Eigen::Vector2d::Zero();  // its input [V, tau_ext]
   double v_ = 0, dir_ = 0;                        // its volts; its direction of motion
   uint32_t k_ = 0;                                // steps into the run
+  uint64_t runs_ = 0;                             // anchors taken: a run's identity within a hold
   bool anchored_ = false;
   int64_t steps_ = 0;
   bool friction_ = true;
