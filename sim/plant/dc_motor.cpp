@@ -262,8 +262,20 @@ AxisPlant::Pieces AxisPlant::pieces(uint32_t lo, uint32_t hi) const {
   // acceleration changes sign) and, without friction, of one sign (split
   // where it crosses zero): on each the angle is monotone too, so once an
   // event holds it holds to the piece's end, and a bisection finds the first.
-  const uint32_t turn = last_of_sign(lo, hi, accel);
   Pieces p{};
+  // With friction the events are monotone over the whole run unless the
+  // shaft first slows down and then speeds up again (speed changes sign
+  // at most once): speeding up first, its speed is least at the run's
+  // ends, so it moves one way until friction stops it, if it does; slowing
+  // down throughout, likewise. Only the dip needs its turn found.
+  if (friction_) {
+    const double a0 = accel(lo) * dir_;
+    if (a0 >= 0 || accel(hi) * dir_ < 0) {
+      p.cut[p.n++] = hi;
+      return p;
+    }
+  }
+  const uint32_t turn = last_of_sign(lo, hi, accel);
   const auto piece = [&](uint32_t a, uint32_t b) {
     const uint32_t cross = friction_ ? b : last_of_sign(a, b, speed);
     if (cross != b) p.cut[p.n++] = cross;
