@@ -128,6 +128,10 @@ void AxisPlant::step(double v) {
     stuck_ = false;  // breakaway, in the direction of the driving torque
     anchor(v, drive > 0 ? 1.0 : -1.0);
   }
+  moving_step();
+}
+
+void AxisPlant::moving_step() {
   // Coulomb friction opposes the motion for the whole step (the run's input).
   x_ = run_state(++k_);
   // Friction can stop the shaft, never reverse it: a step that would cross
@@ -135,7 +139,7 @@ void AxisPlant::step(double v) {
   if (friction_ && x_(1) * dir_ <= 0) {
     x_(1) = 0;
     stuck_ = true;
-    anchor(v, 0);
+    anchor(v_, 0);
   }
 }
 
@@ -176,6 +180,7 @@ AxisPlant::Held AxisPlant::hold_through(double v, uint64_t n, Samples& samples,
   bool cut_set = false;
   bool big = false;
   while (taken < n) {
+    bool moving = false;  // searched a moving run: the next step is in it
     // A stretch of a step or two is taken by step(): cheaper than a search.
     // A longer one on a new input starts its run here, as step() would (the
     // search then covers its first step too).
@@ -211,13 +216,21 @@ AxisPlant::Held AxisPlant::hold_through(double v, uint64_t n, Samples& samples,
         taken += quiet;
         if (stuck)
           x_(0) = run_stuck_current(k_);
-        else
-          x_ = run_state(k_);
+        else if (quiet == lim)
+          x_ = run_state(k_);  // else the event's step sets it
         if (quiet == lim) continue;
       }
+      moving = !stuck;
     }
-    // The step with the event (or the first of a new run): as step() does it.
-    step(v);
+    // The step with the event (or the first of a new run): as step() does
+    // it. In a moving run that is moving_step(), which does not read the
+    // state a quiet stretch left unset.
+    if (moving) {
+      ++steps_;
+      moving_step();
+    } else {
+      step(v);
+    }
     ++taken;
     if (next == taken) *take(1) = position_m();
     if (const int64_t now = encoder_count(); now != count) {

@@ -145,6 +145,9 @@ class AxisPlant {
   // A new run from the current state with this input; the shaft moves in
   // direction dir (friction), or is stuck.
   void anchor(double volts, double dir);
+  // step() of a shaft that moves, in its run: the state from the run,
+  // whatever it was, and friction stopping it.
+  void moving_step();
   // The current run goes on with this input (else a step anchors anew).
   bool in_run(double volts) const { return anchored_ && volts == v_ && k_ < kRun; }
   // State i (0 current, 1 speed, 2 angle) of a run: row i of Ad^k x0 +
