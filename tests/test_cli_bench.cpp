@@ -39,6 +39,11 @@ TEST(CliBench, QuickRunWritesReportCsvAndPlots) {
   EXPECT_NE(md.find("| job, RMS contour error |"), std::string::npos);
   EXPECT_NE(md.find("The goal's case, the two-axis circle at 100 us on the twin: "), std::string::npos);
   EXPECT_NE(md.find("Run alone after the pool, 5 times (same gains"), std::string::npos);
+  // The RTL check's runs against the bare loop measured around each.
+  EXPECT_NE(md.find("3 of 3 runs repeated on the Verilated RTL gave the same controller outputs"),
+            std::string::npos);
+  EXPECT_NE(md.find("measured in this run just before and just after each of them, each alone."),
+            std::string::npos);
   EXPECT_EQ(md.find("| **yes** |"), std::string::npos) << "a job's queue ran dry";
   EXPECT_NE(r.out.find("## Reading"), std::string::npos);
   for (const char* png : {"following_step_same.png", "circle_xy_tuned.png", "contour_vs_ts.png",

@@ -34,6 +34,34 @@ std::vector<std::array<std::string, 3>> rtl_check_runs() {
 namespace {
 
 // Runs the specs in child processes, `jobs` at once, the costliest first.
+// Runs f in a child process and returns the double it computes.
+template <typename F>
+double in_child(F f) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    double v = f();
+    if (::write(fds[1], &v, sizeof v) != sizeof v) _exit(1);
+    _exit(0);
+  }
+  ::close(fds[1]);
+  double v = 0;
+  const bool ok = ::read(fds[0], &v, sizeof v) == sizeof v;
+  ::close(fds[0]);
+  ::waitpid(pid, nullptr, 0);
+  if (!ok) throw std::runtime_error("kernel probe failed");
+  return v;
+}
+
+// The Verilated core alone in a bare C++ loop, its inputs held: simulated
+// s per CPU s, in a child (a process runs one Verilated model of it).
+double bare_speed(const MachineConfig& m, double sim_s) {
+  return in_child(
+      [&] { return bare_rtl_clocks_per_s(uint64_t(std::llround(sim_s * m.clock_hz))) / m.clock_hz; });
+}
+
 std::vector<RunResult> run_pool(const std::vector<RunSpec>& specs, int jobs, const BenchStatus& status) {
   std::vector<size_t> order(specs.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -138,7 +166,10 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
         specs.push_back(std::move(r));
       }
   }
-  // The RTL check: the same specs on the Verilated core, in the same pool.
+  // The RTL check: the same specs on the Verilated core, one at a time
+  // after the pool. Its speed is set against the bare Verilated loop, which
+  // runs alone too: two runs at a time share the machine's two cores and
+  // slow each other, by how much depending on the machine's load.
   std::vector<size_t> checked;
   if (o.rtl_check && o.engine == Engine::Twin)
     for (const auto& [p, sc, pol] : rtl_check_runs())
@@ -146,28 +177,41 @@ BenchResult run_bench(const BenchOptions& o, const BenchStatus& status) {
         if (specs[i].platform.name == p && specs[i].scenario.name == sc &&
             policy_name(specs[i].policy) == pol)
           checked.push_back(i);
-  const size_t n_table = specs.size();
+  std::vector<RunSpec> rtl_specs;
   for (size_t i : checked) {
-    RunSpec r = specs[i];
-    r.engine = Engine::Rtl;
-    specs.push_back(std::move(r));
+    rtl_specs.push_back(specs[i]);
+    rtl_specs.back().engine = Engine::Rtl;
   }
-  std::vector<RunResult> all = run_pool(specs, o.jobs, status);
-
+  // One count of runs over both pools.
+  const int n_all = int(specs.size() + rtl_specs.size());
+  const auto counted = [&](int from) -> BenchStatus {
+    if (!status) return {};
+    return [&status, from, n_all](int done, int, const std::string& last, double frac) {
+      status(from + done, n_all, last, frac);
+    };
+  };
   BenchResult res;
   res.job = job;
-  res.runs.assign(std::make_move_iterator(all.begin()), std::make_move_iterator(all.begin() + long(n_table)));
+  res.runs = run_pool(specs, o.jobs, counted(0));
+  // The bare loop's yardstick just before and after each RTL run: the
+  // machine's speed drifts (a shared VM, by a factor of two within
+  // minutes), so the two are measured together.
+  const double bare_s = o.quick ? 2e-3 : 2e-2;
+  double before = rtl_specs.empty() ? 0 : bare_speed(o.machine, bare_s);
   for (size_t k = 0; k < checked.size(); ++k) {
     RtlCheck c;
     c.run = checked[k];
-    c.rtl = std::move(all[n_table + k]);
+    c.rtl = std::move(run_pool({rtl_specs[k]}, 1, counted(int(specs.size() + k))).front());
+    const double after = bare_speed(o.machine, bare_s);
+    c.bare_speed = (before + after) / 2;
+    before = after;
     const RunResult& t = res.runs[c.run];
     c.same_outputs = t.sample_clock == c.rtl.sample_clock && t.sample_u == c.rtl.sample_u;
     res.rtl_checks.push_back(std::move(c));
   }
   if (o.probe_kernel && (o.engine == Engine::Rtl || !checked.empty()))
     res.probe = probe_kernel(o.machine, o.quick ? 2e-4 : 2e-3);
-  for (size_t i = 0; i < n_table; ++i)
+  for (size_t i = 0; i < specs.size(); ++i)
     if (is_goal_case(specs[i])) {
       for (int k = 0; k < BenchResult::kGoalAloneRuns; ++k) {
         const RunResult r = run_isolated(specs[i]);
@@ -232,27 +276,6 @@ SC_MODULE(DecoupledCore) {
   }
 };
 
-// Runs f in a child process and returns the double it computes.
-template <typename F>
-double in_child(F f) {
-  int fds[2];
-  if (::pipe(fds) != 0) throw std::runtime_error("pipe failed");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::close(fds[0]);
-    double v = f();
-    if (::write(fds[1], &v, sizeof v) != sizeof v) _exit(1);
-    _exit(0);
-  }
-  ::close(fds[1]);
-  double v = 0;
-  const bool ok = ::read(fds[0], &v, sizeof v) == sizeof v;
-  ::close(fds[0]);
-  ::waitpid(pid, nullptr, 0);
-  if (!ok) throw std::runtime_error("kernel probe failed");
-  return v;
-}
-
 }  // namespace
 
 KernelProbe probe_kernel(const MachineConfig& m, double sim_s) {
@@ -261,8 +284,7 @@ KernelProbe probe_kernel(const MachineConfig& m, double sim_s) {
   const double period = 1 / m.clock_hz;
   // The bare loop runs 10 times as long: it is the yardstick of the RTL
   // engine's speed.
-  p.bare_speed = in_child(
-      [&] { return bare_rtl_clocks_per_s(uint64_t(std::llround(10 * sim_s * m.clock_hz))) / m.clock_hz; });
+  p.bare_speed = bare_speed(m, 10 * sim_s);
   p.clocked_speed = in_child([&] {
     sc_core::sc_clock clk("clk", sc_core::sc_time(period, sc_core::SC_SEC));
     ClockedCore c("core");
@@ -619,8 +641,10 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
   }
 
   // Speed.
-  md << "## Simulation speed\n\nWall time, and CPU time (the machine may be shared: the runs go two at a "
-        "time and other work may run beside them).\n\n| platform | engine | simulated s | wall s | x real "
+  md << "## Simulation speed\n\nWall time, and CPU time (the machine may be shared: the tables' runs go "
+     << o.jobs
+     << " at a time, the RTL check's one at a time after them, and other work may run beside "
+        "them).\n\n| platform | engine | simulated s | wall s | x real "
         "time | CPU s | x real time on CPU time |\n|---|---|---|---|---|---|---|\n";
   struct Sum {
     double sim = 0, wall = 0, cpu = 0;
@@ -640,18 +664,20 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
         md << "| " << k << " | " << fmt(v.sim, 2) << " | " << fmt(v.wall, 2) << " | "
            << fmt(v.sim / v.wall, 3) << " | " << fmt(v.cpu, 2) << " | "
            << fmt(v.cpu > 0 ? v.sim / v.cpu : 0, 3) << " |\n";
-  // The RTL runs against the bare model, on CPU time (the machine may be
-  // shared, the runs two at a time).
-  double rtl_sim = 0, rtl_cpu = 0;
-  for (const RtlCheck& c : br.rtl_checks) {
-    rtl_sim += c.rtl.sim_s;
-    rtl_cpu += c.rtl.cpu_s;
-  }
+  // The RTL runs against the bare model, on CPU time: the check's each
+  // against the bare loop measured around it, a whole RTL table's against
+  // the kernel probe's. bare_cpu: the CPU time the runs would have taken at
+  // the bare loop's speed.
+  double rtl_sim = 0, rtl_cpu = 0, bare_cpu = 0;
+  const auto against = [&](const RunResult& r, double bare) {
+    if (bare <= 0) return;
+    rtl_sim += r.sim_s;
+    rtl_cpu += r.cpu_s;
+    bare_cpu += r.sim_s / bare;
+  };
+  for (const RtlCheck& c : br.rtl_checks) against(c.rtl, c.bare_speed);
   for (const RunResult& r : br.runs)
-    if (r.engine == "rtl") {
-      rtl_sim += r.sim_s;
-      rtl_cpu += r.cpu_s;
-    }
+    if (r.engine == "rtl") against(r, br.probe.bare_speed);
   if (!br.other_speeds.empty()) {
     md << "\n| workload | engine | simulated s | wall s | x real time | CPU s | x real time on CPU time "
           "|\n|---|---|---|---|---|---|---|\n";
@@ -688,11 +714,13 @@ std::vector<std::string> write_bench(const BenchOptions& o, const BenchResult& b
         "least 10x on the twin. "
         "`motionctl bench --engine rtl` runs every table on the RTL. The whole benchmark took "
      << fmt(br.wall_s, 1) << " s of wall time with " << o.jobs << " jobs.\n\n";
-  if (br.probe.bare_speed > 0 && rtl_cpu > 0)
-    md << "On CPU time: the Verilated core alone, clocked in a bare C++ loop with its inputs held, ran at "
-       << fmt(br.probe.bare_speed, 4) << "x real time in this run; the RTL co-simulations above (plant, "
-       << "harness and SystemC included) at " << fmt(rtl_sim / rtl_cpu, 4) << "x, "
-       << fmt(100 * rtl_sim / rtl_cpu / br.probe.bare_speed, 0) << " % of it.\n\n";
+  if (rtl_cpu > 0)
+    md << "On CPU time: the RTL co-simulations above (plant, harness and SystemC included) ran at "
+       << fmt(rtl_sim / rtl_cpu, 4) << "x real time, " << fmt(100 * bare_cpu / rtl_cpu, 0)
+       << " % of the speed of the Verilated core alone, clocked in a bare C++ loop with its inputs held ("
+       << fmt(rtl_sim / bare_cpu, 4) << "x), measured in this run "
+       << (br.rtl_checks.empty() ? "after them" : "just before and just after each of them, each alone")
+       << ".\n\n";
   if (br.probe.probe_sim_s > 0)
     md << "SystemC kernel choice (probe of " << br.probe.probe_sim_s * 1e3
        << " ms of core time, no plant): the "

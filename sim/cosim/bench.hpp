@@ -52,6 +52,9 @@ struct RtlCheck {
   size_t run = 0;  // index into BenchResult::runs
   RunResult rtl;
   bool same_outputs = false;  // every controller output and sample clock equal
+  // Simulated s per CPU s of the Verilated core alone in a bare loop: the
+  // mean of its runs just before and just after this one.
+  double bare_speed = 0;
 };
 
 // The runs the RTL check repeats: (platform, scenario, policy).
