@@ -198,6 +198,10 @@ class McBoard {
   // (a following-error trip, a telemetry word or frame), which a skip must
   // not hide.
   // The register file at the walk's end is kept for skip() (walked_).
+  // quiet() found quiet_but_walk(in) before, and a walk keeps it: of what
+  // that reads, the walker's part of a clock sets only ferr_o, tx_start_o
+  // and tlm_pend, each of which ends the walk here. So each clock of it is
+  // a walk_clock(), and it is over once the walker has settled.
   uint32_t walk_clocks(const typename Regs::In& in) {
     Regs& regs = walked_;
     regs = u_regs;
@@ -206,11 +210,11 @@ class McBoard {
     for (uint32_t c = 1; c <= kMaxWalk; ++c) {
       ri.smp_rdata = port;
       walked_raddr_ = regs.smp_raddr_o();
-      walked_changed_ = regs.clock(ri);
+      walked_changed_ = regs.walk_clock(ri);
       port = u_core.port_word(walked_raddr_);
       if (regs.r.ferr_o != 0 || regs.r.tx_start_o || regs.r.tlm_pend || regs.tx_we_o()) return 0;
       ri.smp_rdata = port;
-      if (regs.quiet(ri) && port == u_core.port_word(regs.smp_raddr_o())) return c;
+      if (regs.walk_settled(ri) && port == u_core.port_word(regs.smp_raddr_o())) return c;
     }
     return 0;
   }

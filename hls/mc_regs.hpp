@@ -189,6 +189,7 @@ class McRegs {
     // Nonblocking: every right-hand side reads o, this clock's registers
     // (the helpers read r before the first write); the next values go
     // straight into r (n).
+    const Pre p = pre(in);
     const R o = r;
     const uint32_t live_q = live(o.ra, in);
     R& n = r;
@@ -197,7 +198,6 @@ class McRegs {
     const uint16_t addr = o.addr;
     const uint32_t data = o.data;
     const bool is_pid = (addr >> 8) == 0;
-    const bool is_glb = is_glb_a(addr);
     const bool is_ax = is_ax_a(addr);
     const int a_ax = addr >> 4 & 3;
     const bool rep_busy = o.rep_pend || o.rep_sending;
@@ -205,23 +205,14 @@ class McRegs {
     const uint8_t chk = check(dup);
     const uint8_t filt = filt_len(data);
     const bool apply = o.xs == X_APPLY;
-    const bool w_glb = apply && is_glb;
+    const bool w_glb = p.w_glb;
     const bool w_ax = apply && is_ax && !is_pid;
-    const bool w_start = o.done_d >> 1 & 1;
-    const bool rd_free = !o.w_act && !w_start;
-    const bool tlm_due = o.tlm_decim != 0 && (o.tlm_left >> 1) == 0;
-    const bool tlm_free = !(o.tlm_pend || o.tlm_sending || o.w_tlm_busy);
-    const bool w_last = walk_last();
-    const bool t_v = o.t2 >> 5 & 1, t_last = o.t2 >> 4 & 1;
-    const bool t_follow = t_follow_();
-    const bool wwr = w_wr();
+    const bool rd_free = !o.w_act && !p.w_start;
     const bool xwr = x_wr();
-    const uint32_t q_v = qv(in);
 
     // Counter read-modify-write.
-    const bool cu_free = !o.w_act && o.xs != X_RD && o.xs != X_SET && !o.cu1 && !o.cu2;
-    const uint8_t cu_pick = pick(o.cnt_pend);
-    const bool cu_go = cu_free && o.cnt_pend != 0;
+    const uint8_t cu_pick = p.cu_pick;
+    const bool cu_go = p.cu_go;
     const uint8_t cnt_ev =
         uint8_t(uint32_t(in.junk) << 4 | uint32_t(o.cnt_dup_inc) << 3 | uint32_t(o.cnt_nak_inc) << 2 |
                 uint32_t(in.framing || o.drop_busy) << 1 | uint32_t(in.crc_err));
@@ -231,7 +222,7 @@ class McRegs {
         (o.cu_c2 & 1) ? (o.sq & 0xFFFF) | uint32_t(cu_inc) << 16 : (o.sq & 0xFFFF0000u) | cu_inc;
 
     // Shadow RAM: sq reads the word before this clock's write.
-    n.sq = shadow[o.sa];
+    read_path(o, live_q);
     if (!in.rst) {
       if (apply)
         shadow[sidx(addr)] = data;
@@ -250,10 +241,6 @@ class McRegs {
     }
     n.cu_c1 = cu_pick;
     n.cu_c2 = o.cu_c1;
-
-    // Read path.
-    n.q = live_q;
-    n.q_smp = ra_smp(o.ra);
 
     // Strobes and settings.
     n.arm_set_o = n.arm_clr_o = false;
@@ -474,6 +461,136 @@ class McRegs {
       n.set_t2 = o.set_t1;
     }
 
+    clock_tail(o, in, p);
+    return true;
+  }
+
+  // clock() of a walk with nothing else under way (quiet_but_walk(in)):
+  // only the read path and the walker's part move, the rest holds as
+  // clock() would leave it, for a fraction of the work (McBoard::walk_clocks
+  // clocks a whole walk on a copy each sample). Returns what clock() would.
+  bool walk_clock(const In& in) {
+    if (walk_settled(in)) return false;  // quiet(in): clock() changes nothing
+    const Pre p = pre(in);
+    const R o = r;
+    read_path(o, live(o.ra, in));
+    clock_tail(o, in, p);
+    return true;
+  }
+
+  // ---- fast-forward --------------------------------------------------------
+  // A clock with these inputs changes no register nor the shadow RAM: the
+  // executor idle, no frame to hand to link_tx (none waiting, or link_tx
+  // busy with one), no counter pending, the walker and every pipeline
+  // settled, no strobe. The register file has no free-running counter, so
+  // any number of such clocks changes nothing.
+  bool quiet(const In& in) const { return quiet_but_walk(in) && walk_settled(in); }
+  // Everything of quiet() but the walker and the read pipeline it drives
+  // (the board's fast-forward runs a walk without telemetry on its own:
+  // McBoard::walk_clocks).
+  bool quiet_but_walk(const In& in) const {
+    if (in.rst || in.frame || in.crc_err || in.framing || in.junk || in.done) return false;
+    if (r.xs != X_IDLE || r.tx_start_o) return false;
+    if (!in.tx_busy && (r.rep_pend || r.rep_sending || r.tlm_pend || r.tlm_sending)) return false;
+    if (r.drop_busy || r.cnt_nak_inc || r.cnt_dup_inc || r.cnt_pend != 0 || r.cu1 || r.cu2 || r.cu_c1 != 4 ||
+        r.cu_c2 != 4)
+      return false;
+    if (r.rv || r.seg_wr_o || r.arm_set_o || r.arm_clr_o || r.fclr_o != 0 || r.ip_abort_o || r.ip_clr_o ||
+        r.enc_idx_arm_o != 0 || r.enc_idx_disarm_o != 0 || r.enc_err_clr_o != 0 || r.drv_ovr_we_o != 0 ||
+        r.ferr_o != 0)
+      return false;
+    return r.set_t1 == r.set_n && r.set_t2 == r.set_n;
+  }
+  // The walker idle and the read pipeline settled on the register address.
+  bool walk_settled(const In& in) const {
+    if (r.w_act || r.done_d != 0 || r.w_end || r.w_tlm_busy) return false;
+    const uint8_t t = uint8_t(uint32_t(walk_last()) << 4 | uint32_t(r.w_hdr) << 3 | r.w_k);
+    if (r.t1 != t || r.t2 != t || r.ta1 != r.w_a || r.ta2 != r.w_a) return false;
+    return r.ra == r.addr && r.sa == sidx(r.addr) && r.q == live(r.addr, in) && r.q_smp == ra_smp(r.addr) &&
+           r.sq == shadow[r.sa];
+  }
+
+  // The read pipeline follows an axis's drive command: the register being
+  // read, or the one addressed, is an AX_DRV.
+  bool reads_drive() const { return is_drv(r.addr) || is_drv(r.ra); }
+  static constexpr bool is_drv(uint16_t a) { return (a >> 9 & 1) && (a & 0xF) == board::reg::AX_DRV; }
+
+  // This walk sends no telemetry: none due for the sample it will read,
+  // and none being written. (McBoard::walk_clocks would find that too, on a
+  // copy of the register file; this refuses it before the copy.)
+  bool walk_silent() const { return !r.w_tlm && !r.w_tlm_busy && !(r.done_d != 0 && r.tlm_due_l); }
+
+  // ---- combinational helpers (the RTL's wires) ---------------------------
+  // Shadow RAM index of a register address: {per-axis, low seven bits}.
+  static constexpr uint8_t sidx(uint16_t a) { return uint8_t((a >> 9 & 1) << 7 | (a & 0x7F)); }
+  // A link counter's word: LINK_CRC + w.
+  static constexpr uint8_t cu_word(uint32_t w) { return sidx(uint16_t(board::reg::LINK_CRC + w)); }
+
+ private:
+  static constexpr uint32_t CNT_SHADOW =
+      1u << (board::reg::LINK_CRC & 0x1F) | 1u << (board::reg::LINK_CMD & 0x1F) |
+      1u << (board::reg::LINK_JUNK & 0x1F) | 1u << (board::reg::ID & 0x1F) | 1u << (board::reg::INFO & 0x1F) |
+      1u << (board::reg::CLK_HZ & 0x1F) | 1u << (board::reg::BAUD & 0x1F);
+
+  // Bit i: the global register i (the axis register at offset i) takes
+  // writes, or reads back from the shadow RAM what was written: the table's
+  // access, as rtl/board_regs.vh's R_GLOBAL_WMASK .. R_AX_SHADOW.
+  static constexpr uint32_t reg_mask(bool per_axis, bool shadow) {
+    uint32_t m = 0;
+    for (const board::RegDef& d : board::REGS)
+      if (d.per_axis == per_axis && (shadow ? d.access == board::Access::RW : d.access != board::Access::R))
+        m |= 1u << (d.addr & 0x1F);
+    return m;
+  }
+  static constexpr uint32_t GLOBAL_WMASK = reg_mask(false, false), GLOBAL_SHADOW = reg_mask(false, true);
+  static constexpr uint32_t AX_WMASK = reg_mask(true, false), AX_SHADOW = reg_mask(true, true);
+
+  // What the parts of a clock read besides the registers before it (o):
+  // the helpers' values, which read r, so before the clock's first write.
+  struct Pre {
+    bool w_glb, w_start, tlm_due, tlm_free, w_last, t_v, t_last, t_follow, wwr, cu_go;
+    uint8_t cu_pick;
+    uint32_t q_v;
+  };
+  Pre pre(const In& in) const {
+    Pre p{};
+    p.w_glb = r.xs == X_APPLY && is_glb_a(r.addr);
+    p.w_start = r.done_d >> 1 & 1;
+    p.tlm_due = r.tlm_decim != 0 && (r.tlm_left >> 1) == 0;
+    p.tlm_free = !(r.tlm_pend || r.tlm_sending || r.w_tlm_busy);
+    p.w_last = walk_last();
+    p.t_v = r.t2 >> 5 & 1;
+    p.t_last = r.t2 >> 4 & 1;
+    p.t_follow = t_follow_();
+    p.wwr = w_wr();
+    p.q_v = qv(in);
+    const bool cu_free = !r.w_act && r.xs != X_RD && r.xs != X_SET && !r.cu1 && !r.cu2;
+    p.cu_pick = pick(r.cnt_pend);
+    p.cu_go = cu_free && r.cnt_pend != 0;
+    return p;
+  }
+  // The read path: the shadow word (before this clock's write), the live
+  // value of o.ra (live_q, read before the first write).
+  void read_path(const R& o, uint32_t live_q) {
+    r.sq = shadow[o.sa];
+    r.q = live_q;
+    r.q_smp = ra_smp(o.ra);
+  }
+  // The parts of a clock after the executor: the TLM register, the sample
+  // count, the walker and the read address, the telemetry words and the
+  // following-error check, the sender.
+  void clock_tail(const R& o, const In& in, const Pre& p) {
+    namespace br = board::reg;
+    namespace bb = board::bits;
+    namespace bp = board::proto;
+    R& n = r;
+    const uint16_t addr = o.addr;
+    const uint32_t data = o.data;
+    const bool w_glb = p.w_glb, w_start = p.w_start, tlm_due = p.tlm_due, tlm_free = p.tlm_free,
+               w_last = p.w_last, t_v = p.t_v, t_last = p.t_last, t_follow = p.t_follow, wwr = p.wwr,
+               cu_go = p.cu_go;
+    const uint8_t cu_pick = p.cu_pick;
+    const uint32_t q_v = p.q_v;
     // TLM register: a write restarts the decimation.
     if (in.rst) {
       n.tlm_decim = 0;
@@ -582,75 +699,7 @@ class McRegs {
         }
       }
     }
-    return true;
   }
-
-  // ---- fast-forward --------------------------------------------------------
-  // A clock with these inputs changes no register nor the shadow RAM: the
-  // executor idle, no frame to hand to link_tx (none waiting, or link_tx
-  // busy with one), no counter pending, the walker and every pipeline
-  // settled, no strobe. The register file has no free-running counter, so
-  // any number of such clocks changes nothing.
-  bool quiet(const In& in) const { return quiet_but_walk(in) && walk_settled(in); }
-  // Everything of quiet() but the walker and the read pipeline it drives
-  // (the board's fast-forward runs a walk without telemetry on its own:
-  // McBoard::walk_clocks).
-  bool quiet_but_walk(const In& in) const {
-    if (in.rst || in.frame || in.crc_err || in.framing || in.junk || in.done) return false;
-    if (r.xs != X_IDLE || r.tx_start_o) return false;
-    if (!in.tx_busy && (r.rep_pend || r.rep_sending || r.tlm_pend || r.tlm_sending)) return false;
-    if (r.drop_busy || r.cnt_nak_inc || r.cnt_dup_inc || r.cnt_pend != 0 || r.cu1 || r.cu2 || r.cu_c1 != 4 ||
-        r.cu_c2 != 4)
-      return false;
-    if (r.rv || r.seg_wr_o || r.arm_set_o || r.arm_clr_o || r.fclr_o != 0 || r.ip_abort_o || r.ip_clr_o ||
-        r.enc_idx_arm_o != 0 || r.enc_idx_disarm_o != 0 || r.enc_err_clr_o != 0 || r.drv_ovr_we_o != 0 ||
-        r.ferr_o != 0)
-      return false;
-    return r.set_t1 == r.set_n && r.set_t2 == r.set_n;
-  }
-  // The walker idle and the read pipeline settled on the register address.
-  bool walk_settled(const In& in) const {
-    if (r.w_act || r.done_d != 0 || r.w_end || r.w_tlm_busy) return false;
-    const uint8_t t = uint8_t(uint32_t(walk_last()) << 4 | uint32_t(r.w_hdr) << 3 | r.w_k);
-    if (r.t1 != t || r.t2 != t || r.ta1 != r.w_a || r.ta2 != r.w_a) return false;
-    return r.ra == r.addr && r.sa == sidx(r.addr) && r.q == live(r.addr, in) && r.q_smp == ra_smp(r.addr) &&
-           r.sq == shadow[r.sa];
-  }
-
-  // The read pipeline follows an axis's drive command: the register being
-  // read, or the one addressed, is an AX_DRV.
-  bool reads_drive() const { return is_drv(r.addr) || is_drv(r.ra); }
-  static constexpr bool is_drv(uint16_t a) { return (a >> 9 & 1) && (a & 0xF) == board::reg::AX_DRV; }
-
-  // This walk sends no telemetry: none due for the sample it will read,
-  // and none being written. (McBoard::walk_clocks would find that too, on a
-  // copy of the register file; this refuses it before the copy.)
-  bool walk_silent() const { return !r.w_tlm && !r.w_tlm_busy && !(r.done_d != 0 && r.tlm_due_l); }
-
-  // ---- combinational helpers (the RTL's wires) ---------------------------
-  // Shadow RAM index of a register address: {per-axis, low seven bits}.
-  static constexpr uint8_t sidx(uint16_t a) { return uint8_t((a >> 9 & 1) << 7 | (a & 0x7F)); }
-  // A link counter's word: LINK_CRC + w.
-  static constexpr uint8_t cu_word(uint32_t w) { return sidx(uint16_t(board::reg::LINK_CRC + w)); }
-
- private:
-  static constexpr uint32_t CNT_SHADOW =
-      1u << (board::reg::LINK_CRC & 0x1F) | 1u << (board::reg::LINK_CMD & 0x1F) |
-      1u << (board::reg::LINK_JUNK & 0x1F) | 1u << (board::reg::ID & 0x1F) | 1u << (board::reg::INFO & 0x1F) |
-      1u << (board::reg::CLK_HZ & 0x1F) | 1u << (board::reg::BAUD & 0x1F);
-
-  // Bit i: the global register i (the axis register at offset i) takes
-  // writes, or reads back from the shadow RAM what was written: the table's
-  // access, as rtl/board_regs.vh's R_GLOBAL_WMASK .. R_AX_SHADOW.
-  static constexpr uint32_t reg_mask(bool per_axis, bool shadow) {
-    uint32_t m = 0;
-    for (const board::RegDef& d : board::REGS)
-      if (d.per_axis == per_axis && (shadow ? d.access == board::Access::RW : d.access != board::Access::R))
-        m |= 1u << (d.addr & 0x1F);
-    return m;
-  }
-  static constexpr uint32_t GLOBAL_WMASK = reg_mask(false, false), GLOBAL_SHADOW = reg_mask(false, true);
-  static constexpr uint32_t AX_WMASK = reg_mask(true, false), AX_SHADOW = reg_mask(true, true);
 
   static uint8_t set_bit(uint8_t v, uint8_t m, bool b) { return b ? uint8_t(v | m) : uint8_t(v & ~m); }
   static uint8_t pick(uint8_t pend) {
