@@ -303,7 +303,9 @@ TEST(SimPlant, FrictionOffIsTheLinearModel) {
 // independent reference: x <- Ad x + Bd u iterated, with the friction rules
 // of docs/plant.md written out here, which the runs may differ from only by
 // rounding (the runs take Ad^k from tables).
-void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretches) {
+// bigs: hold_counting() must stop on steps that move the count by more
+// than one (a fine encoder) at least this often.
+void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretches, uint64_t bigs = 0) {
   AxisPlant held(cfg, 1e-6), stepped(cfg, 1e-6);
   held.set_friction(friction);
   stepped.set_friction(friction);
@@ -334,7 +336,7 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
     }
   };
   std::mt19937_64 rng(seed);
-  uint64_t stops = 0, count_mismatch = 0, total = 0, moved = 0, passed = 0;
+  uint64_t stops = 0, count_mismatch = 0, total = 0, moved = 0, passed = 0, big_stops = 0;
   double hold_s = 0;
   double worst = 0;
   for (int s = 0; s < stretches; ++s) {
@@ -377,6 +379,7 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       ASSERT_LE(took, n - done);
       size_t sample = 0, change = 0;
       int64_t last = before;
+      bool last_big = false;  // the last step taken moved the count by more than one
       for (uint64_t k = 0; k < took; ++k) {
         if (!counting) {
           ASSERT_EQ(stepped.encoder_count(), before) << "stretch " << s << ": hold() passed a count change";
@@ -392,7 +395,7 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
           const int64_t d = stepped.encoder_count() - last;
           last = stepped.encoder_count();
           ASSERT_TRUE(d == 1 || d == -1 || k + 1 == took) << "stretch " << s << ": went on after " << d;
-          ASSERT_EQ(h.big, d != 1 && d != -1) << "stretch " << s;
+          last_big = d != 1 && d != -1;
           if (k + 1 < took) ++passed;
         }
         if (sampled && k + 1 >= first && (k + 1 - first) % every == 0) {
@@ -409,6 +412,8 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
       }
       ASSERT_EQ(sample, samples.size()) << "stretch " << s << ": samples past the steps taken";
       ASSERT_EQ(change, changes.size()) << "stretch " << s << ": a change noted that did not happen";
+      ASSERT_EQ(h.big, last_big) << "stretch " << s;
+      big_stops += last_big;
       if (counting && took < n - done) {
         ASSERT_TRUE(h.big) << "stretch " << s << ": hold_counting() stopped short without a big change";
         ++stops;
@@ -436,15 +441,16 @@ void check_hold(const AxisConfig& cfg, bool friction, uint64_t seed, int stretch
   }
   std::printf(
       "%s, friction %d: %d stretches, %llu steps, %llu stops at a count change, %llu changes passed, "
-      "worst relative "
+      "%llu stops after a step of several counts, worst relative "
       "difference from the iterated ZOH %.2g, %llu steps with another count beyond rounding; "
       "hold() %.2f ns per step\n",
       cfg.motor.l_h > 1e-3 ? "complex poles" : "default axis", friction, stretches, (unsigned long long)total,
-      (unsigned long long)stops, (unsigned long long)passed, worst, (unsigned long long)count_mismatch,
-      hold_s * 1e9 / double(total));
+      (unsigned long long)stops, (unsigned long long)passed, (unsigned long long)big_stops, worst,
+      (unsigned long long)count_mismatch, hold_s * 1e9 / double(total));
   EXPECT_GT(stops, 100u);
   EXPECT_GT(moved, 100u);
   EXPECT_GT(passed, 100u);  // hold_counting() went on through changes
+  EXPECT_GE(big_stops, bigs);
   EXPECT_LT(worst, 1e-9);
   EXPECT_EQ(count_mismatch, 0u);
 }
@@ -456,6 +462,9 @@ TEST(SimPlant, HoldTakesTheStepsStepWouldTake) {
   z.load_force_n = 60;  // a Z axis: gravity through the screw
   check_hold(z, true, 3, 3000);
   check_hold(complex_pole_axis(), true, 4, 1000);
+  AxisConfig fine = default_x();
+  fine.encoder_cpr = 1 << 24;  // many counts a step once the shaft moves
+  check_hold(fine, true, 5, 1000, 100);
 }
 
 // Plants of the same discretization share their tables of powers, built
