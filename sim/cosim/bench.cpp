@@ -33,7 +33,6 @@ std::vector<std::array<std::string, 3>> rtl_check_runs() {
 
 namespace {
 
-// Runs the specs in child processes, `jobs` at once, the costliest first.
 // Runs f in a child process and returns the double it computes.
 template <typename F>
 double in_child(F f) {
@@ -51,7 +50,8 @@ double in_child(F f) {
   const bool ok = ::read(fds[0], &v, sizeof v) == sizeof v;
   ::close(fds[0]);
   ::waitpid(pid, nullptr, 0);
-  if (!ok) throw std::runtime_error("kernel probe failed");
+  if (!ok)
+    throw std::runtime_error("a measurement in a child process failed (the bare loop or a kernel probe)");
   return v;
 }
 
@@ -62,6 +62,7 @@ double bare_speed(const MachineConfig& m, double sim_s) {
       [&] { return bare_rtl_clocks_per_s(uint64_t(std::llround(sim_s * m.clock_hz))) / m.clock_hz; });
 }
 
+// Runs the specs in child processes, `jobs` at once, the costliest first.
 std::vector<RunResult> run_pool(const std::vector<RunSpec>& specs, int jobs, const BenchStatus& status) {
   std::vector<size_t> order(specs.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
