@@ -79,27 +79,53 @@ std::shared_ptr<const AxisPlant::Powers> AxisPlant::powers_for(const Eigen::Matr
   pw->bd_1 = bd_1;
   pw->stuck_a_1 = stuck_a;
   pw->stuck_b_1 = stuck_b;
-  pw->k.resize(kRun + 1);
-  pw->stuck_a.resize(kRun + 1);
-  pw->stuck_b.resize(kRun + 1);
-  Eigen::Matrix3d ad = Eigen::Matrix3d::Identity();
-  Eigen::Matrix<double, 3, 2> bd = Eigen::Matrix<double, 3, 2>::Zero();
-  pw->stuck_a[0] = 1;
-  pw->stuck_b[0] = 0;
-  for (uint32_t k = 0;; ++k) {
-    Power& p = pw->k[k];
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) p.ad[i][j] = ad(i, j);
-      for (int j = 0; j < 2; ++j) p.bd[i][j] = bd(i, j);
-    }
-    if (k == kRun) break;
-    bd = bd + ad * bd_1;
-    ad = ad_1 * ad;
-    pw->stuck_a[k + 1] = stuck_a * pw->stuck_a[k];
-    pw->stuck_b[k + 1] = pw->stuck_b[k] + pw->stuck_a[k] * stuck_b;
-  }
+  pw->k = std::make_unique_for_overwrite<Power[]>(kRun + 1);
+  pw->stuck_a = std::make_unique_for_overwrite<double[]>(kRun + 1);
+  pw->stuck_b = std::make_unique_for_overwrite<double[]>(kRun + 1);
   built.push_back(pw);
   return pw;
+}
+
+uint32_t AxisPlant::Powers::fill_to(uint32_t step) const {
+  for (uint32_t c = 0; c < kChunks; ++c) {
+    const uint32_t from = c == 0 ? 0 : kChunkEnd[c - 1], to = kChunkEnd[c];
+    // Each step from the one before, the powers read back from the table
+    // as the loop left them: the same figures whatever the chunks.
+    std::call_once(filled[c], [&] {
+      Eigen::Matrix3d ad = Eigen::Matrix3d::Identity();
+      Eigen::Matrix<double, 3, 2> bd = Eigen::Matrix<double, 3, 2>::Zero();
+      double sa = 1, sb = 0;
+      if (from > 0) {
+        const Power& p = k[from - 1];
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) ad(i, j) = p.ad[i][j];
+          for (int j = 0; j < 2; ++j) bd(i, j) = p.bd[i][j];
+        }
+        sa = stuck_a[from - 1];
+        sb = stuck_b[from - 1];
+        bd = bd + ad * bd_1;
+        ad = ad_1 * ad;
+        sb = sb + sa * stuck_b_1;
+        sa = stuck_a_1 * sa;
+      }
+      for (uint32_t j = from; j < to; ++j) {
+        Power& p = k[j];
+        for (int r = 0; r < 3; ++r) {
+          for (int q = 0; q < 3; ++q) p.ad[r][q] = ad(r, q);
+          for (int q = 0; q < 2; ++q) p.bd[r][q] = bd(r, q);
+        }
+        stuck_a[j] = sa;
+        stuck_b[j] = sb;
+        bd = bd + ad * bd_1;
+        ad = ad_1 * ad;
+        sb = sb + sa * stuck_b_1;
+        sa = stuck_a_1 * sa;
+      }
+    });
+    if (step < to) return to;
+  }
+  throw std::logic_error("plant: step " + std::to_string(step) + " of a run, past the tables' " +
+                         std::to_string(kRun));
 }
 
 void AxisPlant::anchor(double v, double dir) {
@@ -119,6 +145,7 @@ double AxisPlant::driving_torque_nm() const {
 void AxisPlant::step(double v) {
   ++steps_;
   if (!in_run(v)) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
+  reach(k_ + 1);
   if (friction_ && stuck_) {
     const double drive = driving_torque_nm();
     if (std::fabs(drive) <= m_.stiction_nm) {
@@ -133,6 +160,7 @@ void AxisPlant::step(double v) {
 
 void AxisPlant::moving_step() {
   // Coulomb friction opposes the motion for the whole step (the run's input).
+  // (Its callers reached the step: step() and hold_through()'s search.)
   x_ = run_state(++k_);
   // Friction can stop the shaft, never reverse it: a step that would cross
   // zero speed ends at rest, and the stiction test decides what comes next.
@@ -187,6 +215,7 @@ AxisPlant::Held AxisPlant::hold_through(double v, uint64_t n, Samples& samples,
     if (monotone_runs_ && n - taken >= kSearchFrom) {
       if (!in_run(v)) anchor(v, x_(1) > 0 ? 1.0 : -1.0);
       const uint32_t lim = uint32_t(std::min<uint64_t>(n - taken, kRun - k_));
+      reach(k_ + lim);
       const bool stuck = friction_ && stuck_;
       uint32_t quiet;
       if (stuck) {

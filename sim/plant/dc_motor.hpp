@@ -23,6 +23,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "host/machine/machine_config.hpp"
@@ -127,17 +128,28 @@ class AxisPlant {
   // Ad^k and the sum of Ad^j Bd for j < k, k = 0..kRun, row by row (the
   // searches read one state at a time); the stuck current's a^k and b (1 +
   // a + .. + a^(k-1)). Shared by copies, and by plants of the same one-step
-  // matrices (powers_for).
+  // matrices (powers_for). Filled a chunk at a time as runs reach it
+  // (reach()): a loop sampled every 100 us starts a run every 100 steps or
+  // so and never needs the rest, whose pages were a seventh of a short
+  // co-simulation's set-up.
   struct Power {
     double ad[3][3];
     double bd[3][2];
   };
+  static constexpr uint32_t kChunks = 5;
+  static constexpr uint32_t kChunkEnd[kChunks] = {128, 256, 512, 1024, kRun + 1};
   struct Powers {
     Eigen::Matrix3d ad_1;  // the one-step matrices (k = 1), also the key
     Eigen::Matrix<double, 3, 2> bd_1;
     double stuck_a_1, stuck_b_1;
-    std::vector<Power> k;
-    std::vector<double> stuck_a, stuck_b;
+    // kRun + 1 of each, uninitialized until their chunk is filled: the
+    // pointers are const, what they point to is written once, under its
+    // chunk's flag.
+    std::unique_ptr<Power[]> k;
+    std::unique_ptr<double[]> stuck_a, stuck_b;
+    mutable std::once_flag filled[kChunks];
+    // Fills the chunks up to the one holding step; returns that chunk's end.
+    uint32_t fill_to(uint32_t step) const;
   };
   static std::shared_ptr<const Powers> powers_for(const Eigen::Matrix3d& ad_1,
                                                   const Eigen::Matrix<double, 3, 2>& bd_1, double stuck_a,
@@ -148,6 +160,10 @@ class AxisPlant {
   // step() of a shaft that moves, in its run: the state from the run,
   // whatever it was, and friction stopping it.
   void moving_step();
+  // The tables hold step k of a run (k <= kRun).
+  void reach(uint32_t k) {
+    if (k >= reached_) reached_ = pw_->fill_to(k);
+  }
   // The current run goes on with this input (else a step anchors anew).
   bool in_run(double volts) const { return anchored_ && volts == v_ && k_ < kRun; }
   // State i (0 current, 1 speed, 2 angle) of a run: row i of Ad^k x0 +
@@ -168,7 +184,7 @@ class AxisPlant {
   // alias the plant's own doubles, and run_x would read them again each time.
   void run_positions(uint32_t k, uint32_t every, uint64_t count, double* out) const {
     const double x0[3] = {x0_(0), x0_(1), x0_(2)}, u0[2] = {u0_(0), u0_(1)}, to_m = rad_to_m_;
-    const Power* pk = pw_->k.data();
+    const Power* pk = pw_->k.get();
     for (uint64_t i = 0; i < count; ++i) out[i] = run_row(pk[k + i * every], 2, x0, u0) * to_m;
   }
   double run_stuck_current(uint32_t k) const { return pw_->stuck_a[k] * x0_(0) + pw_->stuck_b[k] * v_; }
@@ -211,6 +227,7 @@ class AxisPlant {
   }
 
   std::shared_ptr<const Powers> pw_;
+  uint32_t reached_ = 0;        // steps of a run below this are in the tables
   bool monotone_runs_ = false;  // real poles: a run's speed has at most one extremum
   // The motion (take_motion() copies each of these).
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero();
