@@ -89,15 +89,36 @@ constexpr uint32_t coef_pack(Coef c) {
 // the product, the rounding bit landing inside it; below, the rounding bit
 // falls among the zeros and the result is the product shifted left, which
 // saturates exactly where it leaves ACC_W bits.
-constexpr int64_t mul_align(Coef c, int32_t x) {
-  const int64_t p = int64_t(c.m) * x;  // PROD_W bits, exact
-  if (c.s >= ACC_FRAC) {
-    const int q = c.s - ACC_FRAC;
-    return sat_acc(q == 0 ? p : (p + (int64_t(1) << (q - 1))) >> q);  // arithmetic: floor
+// The shifts and bounds depend on the coefficient alone: CoefShift works
+// them out once, for a caller that applies one coefficient many times (the
+// PID twin's sample, PidPrepared).
+struct CoefShift {
+  bool operator==(const CoefShift&) const = default;
+  int32_t m;
+  bool right;     // s >= ACC_FRAC: (p + round) >> q
+  int q;          // s - ACC_FRAC
+  int64_t round;  // 2^(q-1), 0 for q = 0
+  int k;          // s < ACC_FRAC: p * 2^k, k = ACC_FRAC - s (1..32)
+  int64_t lim;    // |p 2^k| within ACC_W bits below it
+};
+constexpr CoefShift coef_shift(Coef c) {
+  CoefShift h{c.m, c.s >= ACC_FRAC, 0, 0, 0, 0};
+  if (h.right) {
+    h.q = c.s - ACC_FRAC;
+    h.round = h.q == 0 ? 0 : int64_t(1) << (h.q - 1);
+  } else {
+    h.k = ACC_FRAC - c.s;
+    h.lim = int64_t(1) << (ACC_W - 1 - h.k);
   }
-  const int k = ACC_FRAC - c.s;                       // 1..32
-  const int64_t lim = int64_t(1) << (ACC_W - 1 - k);  // |p 2^k| within ACC_W bits below it
-  return p >= lim ? smax(ACC_W) : (p < -lim ? smin(ACC_W) : p * (int64_t(1) << k));
+  return h;
+}
+constexpr int64_t mul_align(const CoefShift& c, int32_t x) {
+  const int64_t p = int64_t(c.m) * x;                 // PROD_W bits, exact
+  if (c.right) return sat_acc((p + c.round) >> c.q);  // arithmetic: floor
+  return p >= c.lim ? smax(ACC_W) : (p < -c.lim ? smin(ACC_W) : p * (int64_t(1) << c.k));
+}
+constexpr int64_t mul_align(Coef c, int32_t x) {
+  return mul_align(coef_shift(c), x);
 }
 
 // The same product in the two parts the RTL delivers (rtl/mul_align.v):

@@ -81,12 +81,37 @@ inline int64_t pid_olim(uint32_t w) {
   return (v == 0 || v > OUT_MAX) ? OUT_MAX : v;
 }
 
+// An axis's parameters as the sample applies them: the coefficients' shifts
+// and the limits worked out from the words once, when they are written
+// (PidCore), rather than at every sample.
+struct PidPrepared {
+  bool operator==(const PidPrepared&) const = default;
+  CoefShift kp, ki, kd_a, kd_b, kf1, kf2;
+  uint32_t dband, elim;  // the words, as pid_error reads them
+  int64_t ulim, ibound;  // the output and integrator bounds, accumulator units
+};
+inline PidPrepared pid_prepare(const PidParams& p) {
+  using namespace pid_reg;
+  PidPrepared q{};
+  q.kp = coef_shift(coef_unpack(p.word[KP]));
+  q.ki = coef_shift(coef_unpack(p.word[KI]));
+  q.kd_a = coef_shift(coef_unpack(p.word[KD_A]));
+  q.kd_b = coef_shift(coef_unpack(p.word[KD_B]));
+  q.kf1 = coef_shift(coef_unpack(p.word[KF1]));
+  q.kf2 = coef_shift(coef_unpack(p.word[KF2]));
+  q.dband = p.word[DBAND];
+  q.elim = p.word[ELIM];
+  q.ulim = pid_olim(p.word[OLIM]) << ACC_FRAC;
+  const int64_t il_w = p.word[ILIM] & 0xFFFF;
+  q.ibound = (il_w != 0 && (il_w << ACC_FRAC) < q.ulim) ? (il_w << ACC_FRAC) : q.ulim;
+  return q;
+}
+
 // One sample of one axis. This is the arithmetic of the RTL schedule, step for
 // step; the order of the saturating additions matters and is the same.
-inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int32_t cmd, int32_t fb) {
-  using namespace pid_reg;
+inline PidOut pid_axis_update(const PidPrepared& p, PidState& st, bool enable, int32_t cmd, int32_t fb) {
   PidOut o;
-  const int32_t e = pid_error(cmd, fb, p.word[DBAND], p.word[ELIM]);
+  const int32_t e = pid_error(cmd, fb, p.dband, p.elim);
   const int32_t sum_e = sat32(int64_t(e) + st.e1);
   const int32_t dif_e = sat32(int64_t(e) - st.e1);
   const int32_t vel = sat32(int64_t(cmd) - st.c1);
@@ -102,16 +127,14 @@ inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int
     st.c1 = cmd;
     return o;
   }
-  const int64_t pterm = mul_align(coef_unpack(p.word[KP]), e);
-  const int64_t di = mul_align(coef_unpack(p.word[KI]), sum_e);
-  const int64_t da = mul_align(coef_unpack(p.word[KD_A]), acc_to_doper(st.d));
-  const int64_t db = mul_align(coef_unpack(p.word[KD_B]), dif_e);
-  const int64_t f1 = mul_align(coef_unpack(p.word[KF1]), vel);
-  const int64_t f2 = mul_align(coef_unpack(p.word[KF2]), acc);
+  const int64_t pterm = mul_align(p.kp, e);
+  const int64_t di = mul_align(p.ki, sum_e);
+  const int64_t da = mul_align(p.kd_a, acc_to_doper(st.d));
+  const int64_t db = mul_align(p.kd_b, dif_e);
+  const int64_t f1 = mul_align(p.kf1, vel);
+  const int64_t f2 = mul_align(p.kf2, acc);
 
-  const int64_t ulim = pid_olim(p.word[OLIM]) << ACC_FRAC;
-  const int64_t il_w = p.word[ILIM] & 0xFFFF;
-  const int64_t ibound = (il_w != 0 && (il_w << ACC_FRAC) < ulim) ? (il_w << ACC_FRAC) : ulim;
+  const int64_t ulim = p.ulim, ibound = p.ibound;
 
   int64_t i_c = sat_acc(st.i + di);
   i_c = i_c > ibound ? ibound : (i_c < -ibound ? -ibound : i_c);
@@ -142,6 +165,9 @@ inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int
   st.c1 = cmd;
   return o;
 }
+inline PidOut pid_axis_update(const PidParams& p, PidState& st, bool enable, int32_t cmd, int32_t fb) {
+  return pid_axis_update(pid_prepare(p), st, enable, cmd, fb);
+}
 
 // SERVO = false: rtl/pid_core.v built without its loops (a stepper board):
 // an enable write is ignored, so every axis runs as a disabled one.
@@ -152,6 +178,10 @@ class PidCore {
  public:
   bool operator==(const PidCore&) const = default;
   static constexpr int latency = pid_latency(NAXES);
+
+  PidCore() {
+    for (PidPrepared& q : prep_) q = pid_prepare(PidParams{});
+  }
 
   // Synchronous reset: enables and state cleared, Ts back to its minimum.
   // The coefficient RAM keeps its contents, as block RAM does.
@@ -171,9 +201,10 @@ class PidCore {
       return;
     }
     if (ax >= NAXES) return;
-    if (r < pid_reg::NREGS_RAM)
+    if (r < pid_reg::NREGS_RAM) {
       par_[ax].word[r] = data;
-    else if (r == pid_reg::CTRL)
+      prep_[ax] = pid_prepare(par_[ax]);
+    } else if (r == pid_reg::CTRL)
       en_[ax] = SERVO && (data & 1);
   }
 
@@ -192,7 +223,7 @@ class PidCore {
   }
 
   void sample(const int32_t* cmd, const int32_t* fb) {
-    for (int a = 0; a < NAXES; ++a) out_[a] = pid_axis_update(par_[a], st_[a], en_[a], cmd[a], fb[a]);
+    for (int a = 0; a < NAXES; ++a) out_[a] = pid_axis_update(prep_[a], st_[a], en_[a], cmd[a], fb[a]);
   }
 
   int32_t u(int a) const { return out_[a].u; }
@@ -203,6 +234,7 @@ class PidCore {
 
  private:
   PidParams par_[NAXES];
+  PidPrepared prep_[NAXES];  // par_ as sample() applies it
   PidState st_[NAXES];
   PidOut out_[NAXES];
   bool en_[NAXES] = {};
