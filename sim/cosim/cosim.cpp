@@ -416,11 +416,13 @@ class Machine {
     }
   }
 
-  void advance_to(uint64_t target) {
+  // To step `target` at least; a jump under way may go on to its own end
+  // (where the drive next changes), up to `limit`.
+  void advance_to(uint64_t target, uint64_t limit) {
     while (step_ < target) {
       if (host())
         host_step();
-      else if (!jump(target))
+      else if (!jump(limit))
         fpga_step();
     }
   }
@@ -536,7 +538,7 @@ class Machine {
   // left it at each. A jump ends after a step that brings more than one
   // new count (fpga_step shows those), inside a step where the core stops
   // before an event, or at a segment's end.
-  bool jump(uint64_t target) {
+  bool jump(uint64_t limit) {
     if (s_.engine != Engine::Twin || step_ == start_step_ || pending_ || feeding()) return false;
     bool edge = false;
     for (int a = 0; a < kCoreAxes; ++a) {
@@ -548,7 +550,7 @@ class Machine {
       emit_plan();
       set_encoder_pins(0);
     }
-    uint64_t steps = target - step_;
+    uint64_t steps = limit - step_;
     if (step_ < start_step_) steps = std::min(steps, start_step_ - step_);
     // Whole steps, up to where the next sample's sweep changes the drive.
     uint64_t most = std::min<uint64_t>(steps * k_, core_->known_drive_clocks()) / k_;
@@ -1070,7 +1072,9 @@ SC_MODULE(SystemModel) {
               Machine & machine, const RunSpec& s)
       : sc_core::sc_module(nm), m(machine), spec(s) {
     // Without the PC loop only the monitor looks at the kernel's time: a
-    // longer quantum, so that fewer of the machine's jumps end at one.
+    // longer quantum, which the machine may overrun to the end of a jump
+    // (a jump cut there would cost a second one: a tenth more jumps at
+    // 100 us, the same figures).
     quantum = std::max<uint64_t>(1, uint64_t(std::llround((m.host() ? 100e-6 : 1e-3) / m.dt())));
     SC_THREAD(machine_proc);
     if (m.host()) SC_THREAD(host_proc);
@@ -1086,8 +1090,8 @@ SC_MODULE(SystemModel) {
       uint64_t target = std::min(m.step_index() + quantum, m.end_step());
       const bool wake = m.host() && m.next_wake_step() <= target;
       if (wake) target = m.next_wake_step();
-      m.advance_to(target);
-      wait(at_step(target) - sc_core::sc_time_stamp());
+      m.advance_to(target, m.host() ? target : m.end_step());
+      wait(at_step(m.step_index()) - sc_core::sc_time_stamp());
       if (wake) {
         wake_ev.notify(sc_core::SC_ZERO_TIME);
         wait(woke_ev);
