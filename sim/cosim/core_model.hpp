@@ -79,8 +79,10 @@ class CoreModel {
                               const PinChange* /*ch*/, size_t count) {
     return count == 0 ? skip(in, n, nullptr, changes) : 0;
   }
-  // This clock's outputs, without the edge (the twin).
-  virtual CoreOut peek(const CoreIn& /*in*/) const { return CoreOut{}; }
+  // Of this clock's outputs, without the edge (the twin): the words queued
+  // for the interpolator, and axis a's drive command (a sample's output).
+  virtual int seg_count() const { return 0; }
+  virtual int16_t drv_cmd(int /*a*/) const { return 0; }
   // Axis a's drive value over the clocks that skip(in, ..) would do (the
   // twin)...
   virtual DriveSteps drive_steps(const CoreIn& /*in*/, int /*a*/) const { return {}; }
@@ -142,7 +144,8 @@ class TwinCore final : public CoreModel {
     return twin_.skip_busy_as(in, n, jump_let_, moved_to(changes), ch, count);
   }
   uint32_t done_in() const override { return twin_.done_in(); }
-  CoreOut peek(const CoreIn& /*in*/) const override { return used_outputs(); }
+  int seg_count() const override { return twin_.interp().count(); }
+  int16_t drv_cmd(int a) const override { return twin_.drv_cmd(a); }
   int32_t cmd(int a) const override { return twin_.interp().pos(a); }
 
  private:

@@ -557,7 +557,7 @@ class Machine {
     if (most == 0) return false;
     Skipped sk;
     for (int a = 0; a < kCoreAxes; ++a) sk.drive[a] = core_->drive_steps(in_, a);
-    const int level = core_->peek(in_).seg_count;
+    const int level = core_->seg_count();
     // The first record in the stretch, counted in steps from here (none
     // before the command starts).
     const uint64_t first =
@@ -595,9 +595,11 @@ class Machine {
     // the one its last clock showed, after all its edges but the last; its
     // count, the last the axis reached.
     size_t mv = 0, cn[kCoreAxes] = {};
-    for (uint64_t j = first; j <= whole; j += record_every_) {
-      for (; mv < moves_.size() && moves_[mv].clock <= j * k_ - 1; ++mv)
-        for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves_[mv].cmd[a];
+    const CmdChange* const moves = moves_.data();
+    const size_t n_moves = moves_.size();
+    for (uint64_t j = first, last = j * k_ - 1; j <= whole; j += record_every_, last += record_every_ * k_) {
+      for (; mv < n_moves && moves[mv].clock <= last; ++mv)
+        for (int a = 0; a < kCoreAxes; ++a) cmd[a] = moves[mv].cmd[a];
       int64_t count[kCoreAxes] = {};
       if (job_)
         for (int a = 0; a < kCoreAxes; ++a) {
@@ -666,8 +668,7 @@ class Machine {
         for (size_t i = from; i < moves_.size(); ++i) moves_[i].clock += uint32_t(done);
         // A sample's done inside the stretch: recorded as after a cycled one
         // (the drive commands hold to the next sweep).
-        if (to_done < m && (at + done + to_done + 1) / k_ >= start_step_)
-          record_sample(at + done + to_done, core_->peek(in_));
+        if (to_done < m && (at + done + to_done + 1) / k_ >= start_step_) record_sample(at + done + to_done);
         done += m;
         res_.clocks_skipped += m;
         // The pins as the skip left them.
@@ -691,7 +692,7 @@ class Machine {
         moved = moved || c.cmd[a] != o.cmd[a];
       }
       if (moved) moves_.push_back(c);
-      if (o.done && (at + done) / k_ >= start_step_) record_sample(at + done - 1, core_->peek(in_));
+      if (o.done && (at + done) / k_ >= start_step_) record_sample(at + done - 1);
     }
     return done;
   }
@@ -778,6 +779,11 @@ class Machine {
   void record_sample(uint64_t done_clock, const CoreOut& o) {
     res_.sample_clock.push_back(done_clock);
     for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(o.drv_cmd[a]);
+  }
+  // The same from the core as it stands (after a skip through done).
+  void record_sample(uint64_t done_clock) {
+    res_.sample_clock.push_back(done_clock);
+    for (int a = 0; a < kCoreAxes; ++a) res_.sample_u[size_t(a)].push_back(core_->drv_cmd(a));
   }
 
   // The pins of clock c of this step (emit_plan).
