@@ -39,6 +39,8 @@ TEST(CliBench, QuickRunWritesReportCsvAndPlots) {
   EXPECT_NE(md.find("| job, RMS contour error |"), std::string::npos);
   EXPECT_NE(md.find("The goal's case, the two-axis circle at 100 us on the twin: "), std::string::npos);
   EXPECT_NE(md.find("Run alone after the pool, 5 times (same gains"), std::string::npos);
+  EXPECT_NE(md.find("the set-up (the machine, its trace and the model built before the kernel starts) took "),
+            std::string::npos);
   // The RTL check's runs against the bare loop measured around each.
   EXPECT_NE(md.find("3 of 3 runs repeated on the Verilated RTL gave the same controller outputs"),
             std::string::npos);

@@ -47,6 +47,9 @@ RunResult twin_like(const RunResult& rtl, RunSpec s) {
     EXPECT_EQ(rtl.cmd_m[a], twin.cmd_m[a]) << "axis " << a;
   }
   EXPECT_GT(twin.clocks_skipped, 0u);
+  // The set-up is timed, and is part of the run's wall time.
+  EXPECT_GT(twin.setup_s, 0);
+  EXPECT_LT(twin.setup_s, twin.wall_s);
   return twin;
 }
 

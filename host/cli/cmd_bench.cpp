@@ -210,6 +210,7 @@ void cosim_command(const CosimCli& c) {
                      {"samples", r.sample_u[0].size()},
                      {"sim_s", r.sim_s},
                      {"wall_s", r.wall_s},
+                     {"setup_s", r.setup_s},
                      {"clocks_cycled", r.clocks_cycled},
                      {"clocks_skipped", r.clocks_skipped}};
     if (step) {

@@ -79,6 +79,7 @@ struct BenchResult {
   static constexpr int kGoalAloneRuns = 5;
   double goal_alone_sim_s = 0;
   std::vector<double> goal_alone_wall_s;
+  std::vector<double> goal_alone_setup_s;  // of each, the run's set-up (RunResult::setup_s)
   double wall_s = 0;
 };
 

@@ -1195,6 +1195,7 @@ void fields(IO& io, R& r) {
   io.pod(r.tracking);
   io.pod(r.sim_s);
   io.pod(r.wall_s);
+  io.pod(r.setup_s);
   io.pod(r.cpu_s);
   io.pod(r.clocks_cycled);
   io.pod(r.clocks_skipped);
@@ -1236,11 +1237,13 @@ RunResult run(const RunSpec& spec) {
   Machine machine(spec);
   SystemModel model("system", machine, spec);
   sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+  const auto t1 = std::chrono::steady_clock::now();
   sc_core::sc_start();
   // Both clocks stop here, before finish() computes the result's metrics.
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t2 = std::chrono::steady_clock::now();
   const double cpu = process_cpu_s() - cpu0;
-  RunResult r = machine.finish(wall);
+  RunResult r = machine.finish(std::chrono::duration<double>(t2 - t0).count());
+  r.setup_s = std::chrono::duration<double>(t1 - t0).count();
   r.cpu_s = cpu;
   return r;
 }

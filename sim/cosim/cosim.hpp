@@ -159,7 +159,8 @@ struct RunResult {
   mc::host::StepMetrics step{};  // step only, axis x
   bool tracking = true;          // within a quarter of the move of the command at the end
   double sim_s = 0, wall_s = 0;
-  double cpu_s = 0;  // the process's CPU time for the run (the machine may be shared)
+  double setup_s = 0;  // of wall_s, building the machine, its trace and the model, before the kernel runs
+  double cpu_s = 0;    // the process's CPU time for the run (the machine may be shared)
   uint64_t clocks_cycled = 0, clocks_skipped = 0;
 };
 // This process's CPU time, s.
