@@ -130,7 +130,10 @@ class McBoard {
     walk_ = 0;
     let_ = {};
     sending_ = false;
-    if (n == 0 || in.rst) return 0;
+    // The PID's tick or done in this clock ends every stretch (the board's
+    // skips do not go through them: quiet_limit_as below): found here, the
+    // two clocks of a sample that are always clocked skip the checks.
+    if (n == 0 || in.rst || u_core.pid().quiet_limit() == 0) return 0;
     // A frame on its way out (link_tx busy) goes on inside the stretch
     // (sending_, below); otherwise uart_tx is idle, and a byte handed to it
     // ends the stretch.
