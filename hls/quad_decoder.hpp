@@ -306,9 +306,9 @@ class QuadDecoder {
   }
 
  private:
-  // The rest of skip_settling(), rarely taken, out of line: inlined there it
-  // made every call save the registers its steps use (1.5 M instructions
-  // more on the co-simulated circle, a build where GCC chose to inline it).
+  // The rest of skip_settling(), rarely taken, out of line: where GCC
+  // inlined it, every call of skip_settling() saved the registers its steps
+  // use, which the co-simulation's instruction count showed.
   [[gnu::noinline]] void step_then_skip(const QuadIn& in, uint32_t n) {
     uint32_t i = 0;
     for (; i < n && !quiet(in); ++i) step(in);

@@ -3,9 +3,9 @@
 // zero them on resize() and the simulation write them again; this allocator
 // takes large blocks as fresh anonymous pages, which the kernel zeroes and
 // (MAP_POPULATE) maps in one call rather than one page fault at a time, so
-// value-initializing an element writes nothing (a fresh page costs about
-// 1.2 us mapped so, 2 us through a fault: 0.33 and 0.28 ms of a run's
-// set-up for a 1.2 MB and a 0.6 MB column). Small blocks come from
+// value-initializing an element writes nothing (a page mapped so costs
+// less than a page fault, and the trace's pages are most of a short run's
+// set-up: RunResult::setup_s). Small blocks come from
 // std::allocator, zeroed. So a column is sized once: grown again after
 // shrinking (resize() after a smaller resize() or clear()), it would show
 // the old values where zeros belong.

@@ -95,6 +95,12 @@ uint32_t AxisPlant::Powers::fill_to(uint32_t step) const {
       Eigen::Matrix3d ad = Eigen::Matrix3d::Identity();
       Eigen::Matrix<double, 3, 2> bd = Eigen::Matrix<double, 3, 2>::Zero();
       double sa = 1, sb = 0;
+      const auto next = [&] {  // one step on
+        bd = bd + ad * bd_1;
+        ad = ad_1 * ad;
+        sb = sb + sa * stuck_b_1;
+        sa = stuck_a_1 * sa;
+      };
       if (from > 0) {
         const Power& p = k[from - 1];
         for (int i = 0; i < 3; ++i) {
@@ -103,10 +109,7 @@ uint32_t AxisPlant::Powers::fill_to(uint32_t step) const {
         }
         sa = stuck_a[from - 1];
         sb = stuck_b[from - 1];
-        bd = bd + ad * bd_1;
-        ad = ad_1 * ad;
-        sb = sb + sa * stuck_b_1;
-        sa = stuck_a_1 * sa;
+        next();
       }
       for (uint32_t j = from; j < to; ++j) {
         Power& p = k[j];
@@ -116,10 +119,7 @@ uint32_t AxisPlant::Powers::fill_to(uint32_t step) const {
         }
         stuck_a[j] = sa;
         stuck_b[j] = sb;
-        bd = bd + ad * bd_1;
-        ad = ad_1 * ad;
-        sb = sb + sa * stuck_b_1;
-        sa = stuck_a_1 * sa;
+        next();
       }
     });
     if (step < to) return to;

@@ -130,8 +130,8 @@ class AxisPlant {
   // a + .. + a^(k-1)). Shared by copies, and by plants of the same one-step
   // matrices (powers_for). Filled a chunk at a time as runs reach it
   // (reach()): a loop sampled every 100 us starts a run every 100 steps or
-  // so and never needs the rest, whose pages were a seventh of a short
-  // co-simulation's set-up.
+  // so and never needs the rest, whose fresh pages were most of the
+  // plants' part of a short co-simulation's set-up.
   struct Power {
     double ad[3][3];
     double bd[3][2];
