@@ -44,6 +44,7 @@ template <int NAXES = 3, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 4, int 
 class McBoard {
  public:
   using Core = MotionCore<NAXES, FIFO_AW, PWM_BITS, FILT_W, true, SERVO>;  // IDX_RAM: as the board builds it
+  using PinChange = mc::PinChange;
   using Regs = McRegs<NAXES, FIFO_AW, FILT_W, CLK_HZ, BAUD, STEPPERS, SERVO, HANDWHEEL>;
   using Safety = McSafety<NAXES>;
   using Io = McIo<NAXES>;
@@ -221,9 +222,26 @@ class McBoard {
     }
     return 0;
   }
-  void skip(uint32_t n) {
+  // The stretch may take encoder edges: pins changing as ch says (in clock
+  // order, each at clock 1 or later), the first `count` of them those that
+  // foldable() allowed.
+  void skip(uint32_t n, const PinChange* ch = nullptr, size_t count = 0) {
     u_urx.skip(n);
-    skip_but_rx(n);
+    skip_but_rx(n, ch, count);
+  }
+  // Of these encoder pins' changes inside the stretch quiet() found, how
+  // many in a row it may take: edges its decoders settle cleanly
+  // (Core::foldable; the stretch lets them settle), on axes whose decoder
+  // counts the pins (not an open-loop stepper's). Each moves only a count,
+  // which the PID reads at a tick and no stretch goes through (nor does the
+  // register file read it live: positions come from the sample RAM).
+  size_t foldable(const PinChange* ch, size_t count) const {
+    for (size_t i = 0; i < count; ++i)
+      if (u_step.stepper >> ch[i].axis & 1) {
+        count = i;
+        break;
+      }
+    return u_core.foldable(core_in_, ch, count);
   }
   // Over the pins after edges from .. from + n - 1 of the stretch quiet()
   // found (before skip()): axis a's PWM (STEP) pin high, counted -1 with
@@ -242,11 +260,11 @@ class McBoard {
     return u_core.drive_change(core_in_, a);
   }
   template <typename Rx>
-  void skip_line(uint32_t n, Rx&& rx) {
+  void skip_line(uint32_t n, Rx&& rx, const PinChange* ch = nullptr, size_t count = 0) {
     u_urx.skip_line(n, rx);
-    skip_but_rx(n);
+    skip_but_rx(n, ch, count);
   }
-  void skip_but_rx(uint32_t n) {
+  void skip_but_rx(uint32_t n, const PinChange* ch = nullptr, size_t count = 0) {
     wired_ = false;
     if (walk_ > 0 && n >= walk_) {  // quiet() found a walk that ends in the stretch: its end
       u_regs = walked_;
@@ -275,13 +293,25 @@ class McBoard {
       // quiet() found at least n clocks before the segment's end. The step
       // generators take the command their last clock showed: after all
       // edges but the last.
-      if (n > 1) u_core.skip_as(core_in_, n - 1, let_);
+      if (n > 1) u_core.skip_as(core_in_, n - 1, let_, ch, count);
       uint8_t cmd = 0;
       for (int a = 0; a < NAXES; ++a) cmd = uint8_t(cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
-      u_core.skip_as(core_in_, 1, let_);
+      // The last clock on the pins the edges before it left.
+      if (count == 0) {
+        u_core.skip_as(core_in_, 1, let_);
+      } else {
+        typename Core::In at = core_in_;
+        size_t k = 0;
+        for (; k < count && ch[k].clock < n - 1; ++k) {
+          at.enc_a[ch[k].axis] = ch[k].a;
+          at.enc_b[ch[k].axis] = ch[k].b;
+          at.enc_z[ch[k].axis] = ch[k].z;
+        }
+        u_core.skip_as(at, 1, let_, ch + k, count - k, n - 1);
+      }
       u_step.follow(cmd);
     } else {
-      u_core.skip_as(core_in_, n, let_);
+      u_core.skip_as(core_in_, n, let_, ch, count);
     }
     u_io.skip(n, u_safety.armed_o);
     if constexpr (HANDWHEEL) u_hw.skip(n);

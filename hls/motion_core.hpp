@@ -76,6 +76,14 @@ struct MotionOut {
 enum SampleField : uint8_t { SMP_CMD = 0, SMP_FB = 1, SMP_ERR = 2, SMP_OUT = 3, SMP_FOLLOW = 4 };
 constexpr int SMP_FIELDS = 8;  // per axis: the address has three field bits
 
+// An encoder's pins changing inside a stretch: from its clock-th clock on
+// (counted from the stretch's first, 0), axis `axis` shows a, b, z.
+struct PinChange {
+  uint32_t clock;
+  int axis;
+  bool a, b, z;
+};
+
 // IDX_RAM: the decoders' index latches in block RAM (rtl/quad_decoder.v), as
 // the board builds them.
 template <int NAXES, int FIFO_AW = 9, int PWM_BITS = 9, int FILT_W = 8, bool IDX_RAM = false,
@@ -302,12 +310,15 @@ class MotionCore {
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a
   // copy tells how far that is).
-  void skip_as(const In& in, uint32_t n, Let let) {
+  // The pins may change as the first `count` of ch say (foldable(), their
+  // clocks counted from `from`, the stretch's first clock).
+  void skip_as(const In& in, uint32_t n, Let let, const PinChange* ch = nullptr, size_t count = 0,
+               uint32_t from = 0) {
     if (let.busy && ip_.state() == InterpCore<FIFO_AW>::ST_RUN)
       ip_.run_to_end(n);
     else
       skip_interp(n);
-    skip_others(n, &in, let);
+    skip_others(n, &in, let, ch, count, from);
   }
   void read_port(uint8_t raddr) { r_.smp_rdata = read_bank(raddr); }
   uint32_t port_word(uint8_t raddr) const { return read_bank(raddr); }
@@ -328,13 +339,7 @@ class MotionCore {
   uint32_t skip_busy_as(const In& in, uint32_t n, Let let, Moved&& moved) {
     return skip_busy_as(in, n, let, moved, nullptr, 0);
   }
-  // An encoder's pins changing inside a stretch: from its clock-th clock on
-  // (counted from the stretch's first, 0), axis `axis` shows a, b, z.
-  struct PinChange {
-    uint32_t clock;
-    int axis;
-    bool a, b, z;
-  };
+  using PinChange = mc::PinChange;
   // Of these changes (in clock order, each at clock 1 or later) inside a
   // stretch that quiet_as(in, .., let) allowed with let.settle, how many in
   // a row the stretch may take: each a clean edge of its decoder

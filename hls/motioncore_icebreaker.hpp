@@ -106,9 +106,17 @@ class MotioncoreIcebreaker {
     }
     return idle_ < limit ? idle_ : limit;
   }
-  void advance(const IcebreakerPins& p, uint32_t n) {
-    u_board.skip(n);
-    idle_ = pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
+  void advance(const IcebreakerPins& p, uint32_t n) { advance(p, n, nullptr, 0); }
+  // The same with encoder edges inside (ch: changes of the encoder pins,
+  // clocks from the stretch's first, each at 1 or later; the first `count`
+  // of them, all before clock n, those that foldable() allows). p: the pins
+  // before them.
+  using PinChange = mc::PinChange;
+  size_t foldable(const PinChange* ch, size_t count) const { return u_board.foldable(ch, count); }
+  void advance(const IcebreakerPins& p, uint32_t n, const PinChange* ch, size_t count) {
+    u_board.skip(n, ch, count);
+    // Edges leave other pins: the stretch is found again.
+    idle_ = count == 0 && pins_word(p) == idle_pins_ && idle_ >= n ? idle_ - n : 0;
   }
   // Inside a byte on RX, with the line's future known: line(t) is the RX
   // pin in the t-th clock from now (line(0) == p.rx), every other pin held.
@@ -124,9 +132,10 @@ class MotioncoreIcebreaker {
     return u_board.quiet_line(board_in(p), limit, synced(line));
   }
   template <typename Line>
-  void advance_line(const IcebreakerPins& p, uint32_t n, Line&& line) {
+  void advance_line(const IcebreakerPins& p, uint32_t n, Line&& line, const PinChange* ch = nullptr,
+                    size_t count = 0) {
     if (n == 0) return;
-    u_board.skip_line(n, synced(line));
+    u_board.skip_line(n, synced(line), ch, count);
     const auto at = [&](uint32_t t) { return uint8_t((sync_in(p) & ~kRx) | (line(t) ? kRx : 0)); };
     s2 = n >= 2 ? at(n - 2) : s1;
     s1 = at(n - 1);

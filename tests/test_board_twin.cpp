@@ -955,7 +955,7 @@ std::string state_diff(const Twin& x, const Twin& y) {
   SAMEO(done);
   SAMEO(smp_rdata);
   for (int a = 0; a < 3; ++a) {
-    same("decoder", ox.enc[a] == oy.enc[a], true);
+    same("decoder", cx.decoder(a) == cy.decoder(a), true);  // every register, not only its outputs
     SAMEO(pwm[a]);
     SAMEO(dir[a]);
     SAMEO(drv_en[a]);
@@ -1139,6 +1139,105 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
   EXPECT_GT(frames, 3u);
   EXPECT_GT(drive_changes, 1000u);
   EXPECT_GT(runs_ended, 1000u);
+}
+
+// Encoder edges taken inside advances (Twin::foldable, the virtual board's
+// jumps): a twin that advances over each idle stretch with the encoders'
+// pins changing inside it, as many edges in a row as foldable() allows,
+// against one that steps every clock with the pins changing at those
+// clocks; the whole state compared after each advance. The three axes
+// servo on their encoders and segments run, so that edges come inside
+// stretches that take drive updates and move the command; now and then an
+// edge skips a count (an error, which no stretch may take).
+TEST(BoardTwin, AdvanceTakesEncoderEdges) {
+  static constexpr bool kA[4] = {false, true, true, false}, kB[4] = {false, false, true, true};
+  // Servoing, with pauses between frames and most frames queueing segments.
+  static constexpr Profile kMoving{"moving", 80, 0,      5,         3,         12, 2, 1,  1, 1,
+                                   1,        1,  20'000, 1'000'000, 3'000'000, 10, 2, 70, 60};
+  uint64_t folded = 0, refused = 0, skips = 0, moved = 0;
+  for (uint64_t seed : {411, 412, 413}) {
+    Rig rig(seed, kMoving);
+    rig.host.servo();
+    rig.step_queued();
+    auto& [rng, host, pins, ref, fast, p] = rig;
+    // Each encoder's count (its pins show it), the clocks between its
+    // edges (0: still), its direction and phase.
+    int64_t count[3] = {};
+    uint32_t period[3] = {}, phase[3] = {};
+    int dir[3] = {1, 1, 1};
+    const auto show = [&](int a, int64_t c) {
+      count[a] = c;
+      p.enc_a[a] = kA[c & 3];
+      p.enc_b[a] = kB[c & 3];
+    };
+    uint64_t clocks = 0;
+    while (clocks < 1'500'000) {
+      // The host's line holds a level for `left` clocks (its frames reach
+      // the board whole), the other pins too.
+      bool level = true;
+      uint32_t left = host.line(6000, level);
+      p.rx = level;
+      pins.clock(p);
+      for (int a = 0; a < 3; ++a) show(a, count[a]);  // the encoders are this test's
+      if (clocks == 0 || rng() % 300 == 0)
+        for (int a = 0; a < 3; ++a) {
+          period[a] = rng() % 4 == 0 ? 0 : 13 + uint32_t(rng() % 400);
+          phase[a] = uint32_t(rng() % 1000);
+          dir[a] = rng() % 2 ? 1 : -1;
+        }
+      while (left > 0) {
+        const uint32_t k = fast.idle_clocks(p, left);
+        if (k < 2) {
+          ref.step(p);
+          fast.step(p);
+          ++clocks;
+          --left;
+          ASSERT_TRUE(same_pins(ref, fast)) << "clock " << clocks << ", seed " << seed;
+          continue;
+        }
+        std::vector<mc::PinChange> ch;
+        std::vector<int64_t> to;  // the count each change shows
+        int64_t c[3] = {count[0], count[1], count[2]};
+        for (uint32_t t = 1; t < k; ++t)
+          for (int a = 0; a < 3; ++a)
+            if (period[a] != 0 && (clocks + t + phase[a]) % period[a] == 0) {
+              c[a] += rng() % 500 == 0 ? 2 * dir[a] : dir[a];
+              ch.push_back(mc::PinChange{t, a, kA[c[a] & 3], kB[c[a] & 3], false});
+              to.push_back(c[a]);
+            }
+        const size_t f = fast.foldable(ch.data(), ch.size());
+        ASSERT_LE(f, ch.size());
+        uint32_t n = f < ch.size() ? ch[f].clock : k;  // up to the first edge it cannot take
+        if (rng() % 4 == 0) n = 1 + uint32_t(rng() % n);
+        size_t take = 0;
+        while (take < f && ch[take].clock < n) ++take;
+        int32_t cmd[3];
+        for (int a = 0; a < 3; ++a) cmd[a] = ref.u_board.u_core.interp().pos(a);
+        fast.advance(p, n, ch.data(), take);
+        size_t e = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+          for (; e < take && ch[e].clock == i; ++e) show(ch[e].axis, to[e]);
+          ref.step(p);
+        }
+        for (int a = 0; a < 3; ++a) moved += take > 0 && ref.u_board.u_core.interp().pos(a) != cmd[a];
+        clocks += n;
+        left -= n;
+        folded += take;
+        refused += f < ch.size();
+        ++skips;
+        ASSERT_EQ(state_diff(ref, fast), "") << "after advancing " << n << " clocks with " << take
+                                             << " edges at clock " << clocks << ", seed " << seed;
+      }
+    }
+  }
+  std::printf(
+      "edges: %llu taken inside %llu advances (%llu with the command moving), %llu stretches "
+      "ended at one refused\n",
+      (unsigned long long)folded, (unsigned long long)skips, (unsigned long long)moved,
+      (unsigned long long)refused);
+  EXPECT_GT(folded, 10'000u);
+  EXPECT_GT(moved, 100u);
+  EXPECT_GT(refused, 100u);
 }
 
 // The virtual board's host line ahead of time: pin_after(t) is pin() after t

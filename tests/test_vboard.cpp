@@ -6,9 +6,11 @@
 // nothing a host or a plant can see.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -29,7 +31,9 @@ struct Session {
   std::vector<std::pair<uint64_t, uint8_t>> tx;
   std::vector<double> pos;
   std::vector<uint32_t> reads;
-  uint64_t cycles = 0, stepped = 0, held = 0;
+  std::vector<sim::VirtualBoard::EncoderEdge> edges;  // in clock order, then by axis
+  std::string stopped;                                // why the move stopped early (empty: it did not)
+  uint64_t cycles = 0, stepped = 0, held = 0, lim_edges = 0;
   double wall_s = 0;
 };
 
@@ -38,12 +42,23 @@ struct Session {
 // table's Z at z_m: 0 on the workpiece's face (the probe touching), or
 // clear of it (the twin then runs the plants by held runs). A plant step of
 // clocks_per_step clocks (0: the machine's).
-Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0) {
+// The move: from (x0, 0) by (dx, dy) at feed (m/s), on a PID sample period
+// of ts.
+// quiet: the whole move queued at once, then no host traffic while it runs
+// (else the host streams it and polls).
+struct Move {
+  double x0 = 0, dx = 0.4e-3, dy = -0.3e-3, feed = 0.025, ts = 100e-6;
+  bool quiet = false;
+};
+Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0, const Move& mv = {}) {
   machine::MachineConfig m = machine::default_machine();
   if (clocks_per_step != 0) m.plant_dt_s = clocks_per_step / m.clock_hz;
   sim::VirtualBoard board(m, 0, e);
+  board.start_at(0, mv.x0);
   board.start_at(2, z_m);
   sim::BoardStream s(board, true);
+  Session r;
+  board.log_encoder_edges(&r.edges);
   host::BoardLink link(s);
   const auto t0 = std::chrono::steady_clock::now();
   link.connect();
@@ -56,7 +71,7 @@ Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0
     g.ki = c.ki;
     g.kd = c.kd;
     g.tf = c.tf_s;
-    g.ts = 100e-6;
+    g.ts = mv.ts;
     host::CoreLimits lim;
     lim.out_limit = uint32_t(c.out_limit);
     host::apply_gains(link, a, g, lim, quiet);
@@ -64,11 +79,25 @@ Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0
   host::enable_axes(link, {0, 1}, quiet);
   link.write(br::TLM, 0x3u << 16 | 20);  // X and Y every 20th sample
   const double cpm = machine::counts_per_m(m.axes[0]);
-  const host::Vec3 to{std::llround(0.4e-3 * cpm), std::llround(-0.3e-3 * cpm), 0};
-  host::run_segments(link, host::plan_move({0, 0, 0}, to, 0.025 * cpm, m.clock_hz));
+  const host::Vec3 to{std::llround(mv.dx * cpm), std::llround(mv.dy * cpm), 0};
+  const auto plan = host::plan_move({0, 0, 0}, to, mv.feed * cpm, m.clock_hz);
+  if (mv.quiet) {
+    std::vector<seg::Words> words;
+    words.reserve(plan.size());
+    for (const auto& p : plan) words.push_back(seg::pack(p.seg));
+    for (size_t i = 0; i < words.size(); i += 6)
+      EXPECT_TRUE(
+          link.segments({words.begin() + long(i), words.begin() + long(std::min(words.size(), i + 6))}));
+    link.poll(std::chrono::milliseconds(30));
+  } else {
+    try {
+      host::run_segments(link, plan);
+    } catch (const std::exception& ex) {  // a fault stopped it: a switch reached
+      r.stopped = ex.what();
+    }
+  }
   link.write(br::TLM, 0);
   link.poll(std::chrono::milliseconds(5));  // the move settles
-  Session r;
   for (uint16_t reg : {br::STATUS, br::FAULT, br::IP_SEGS, br::LINK_CRC, br::LINK_CMD})
     r.reads.push_back(link.read(reg));
   for (int a = 0; a < 2; ++a) r.reads.push_back(link.read(uint16_t(br::AXIS_BASE + a * br::AXIS_STRIDE)));
@@ -78,6 +107,11 @@ Session session(sim::BoardEngine e, double z_m = 0, uint32_t clocks_per_step = 0
   r.cycles = board.cycles();
   r.stepped = board.stepped_clocks();
   r.held = board.held_steps();
+  r.lim_edges = board.limit_edges(0);
+  board.log_encoder_edges(nullptr);
+  std::stable_sort(r.edges.begin(), r.edges.end(), [](const auto& x, const auto& y) {
+    return x.clock != y.clock ? x.clock < y.clock : x.axis < y.axis;
+  });
   return r;
 }
 
@@ -88,6 +122,13 @@ void expect_same(const Session& twin, const Session& rtl) {
   ASSERT_EQ(twin.pos.size(), rtl.pos.size());
   for (size_t i = 0; i < twin.pos.size(); ++i) ASSERT_EQ(twin.pos[i], rtl.pos[i]) << "position " << i;
   EXPECT_EQ(twin.reads, rtl.reads);
+  EXPECT_EQ(twin.lim_edges, rtl.lim_edges);
+  EXPECT_EQ(twin.stopped, rtl.stopped);
+  // The encoder pins changed at the same clocks (the PID reads a count only
+  // at its tick: an edge shown late inside a stretch would show nowhere else).
+  ASSERT_EQ(twin.edges.size(), rtl.edges.size());
+  for (size_t i = 0; i < twin.edges.size(); ++i)
+    ASSERT_EQ(twin.edges[i], rtl.edges[i]) << "encoder edge " << i << " at clock " << rtl.edges[i].clock;
 }
 
 TEST(VBoard, TwinAndRtlGiveIdenticalOutputs) {
@@ -121,6 +162,28 @@ TEST(VBoard, HeldPlantRunsGiveTheStepsTheRtlTakes) {
   const Session rtl = session(sim::BoardEngine::Rtl, 0.002);
   EXPECT_GT(twin.held, twin.cycles / 12 / 5) << "the plants ran by holds in under a fifth of the steps";
   EXPECT_EQ(rtl.held, 0u);
+  EXPECT_GT(twin.edges.size(), 250u) << "the tables hardly moved";
+  expect_same(twin, rtl);
+}
+
+// X across its home switch, fast, on a 2 ms sample period: a stretch of the
+// board runs a sample long, in which X moves 40 counts, and the twin's
+// jumps take encoder edges inside; a jump must still end before the table
+// could reach the switch, which then trips in the RTL's step.
+TEST(VBoard, EdgesInsideJumpsStopShortOfASwitch) {
+  const machine::MachineConfig m = machine::default_machine();
+  Move mv;
+  mv.x0 = m.axes[0].home->switch_m - 0.3e-3;
+  mv.dx = 0.6e-3;
+  mv.dy = 0;
+  mv.feed = 0.05;
+  mv.ts = 2e-3;
+  mv.quiet = true;
+  const Session twin = session(sim::BoardEngine::Twin, 0.002, 0, mv);
+  const Session rtl = session(sim::BoardEngine::Rtl, 0.002, 0, mv);
+  EXPECT_GE(twin.lim_edges, 1u) << "X never reached its switch";
+  EXPECT_NE(twin.reads[1] >> board::bits::F_LIMIT_LSB & 1, 0u) << "no limit fault on X";
+  EXPECT_GT(twin.held, twin.cycles / 12 / 5) << "the plants ran by holds in under a fifth of the steps";
   expect_same(twin, rtl);
 }
 

@@ -16,7 +16,7 @@ class TwinBoard final : public BoardModel {
       // EN holds through the stretch; PWM follows its counter.
       if (b_.drv_en())
         for (int a = 0; a < kBoardAxes; ++a) drive[a] += b_.drive_in(a, 0, n);
-      advance(p, n, line);
+      advance(p, n, line, nullptr, 0);
       return n;
     }
     b_.step(p);
@@ -40,17 +40,20 @@ class TwinBoard final : public BoardModel {
   uint32_t idle_drive_runs(int a, uint32_t from, uint32_t k, uint32_t max) const override {
     return b_.drv_en() ? b_.drive_runs(a, from, k, max) : max;
   }
-  void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line) override {
+  void advance(const IcebreakerPins& p, uint32_t n, UartReceiver& line, const PinChange* ch,
+               size_t count) override {
     before_stretch(n, line);
-    b_.advance(p, n);
+    b_.advance(p, n, ch, count);
   }
+  size_t idle_foldable(const PinChange* ch, size_t count) const override { return b_.foldable(ch, count); }
   void idle_tx(uint32_t n, const Levels& f) const override { b_.tx_levels(n, f); }
   uint32_t line_clocks(const IcebreakerPins& p, uint32_t limit, const RxLine& rx) override {
     return b_.line_clocks(p, limit, rx);
   }
-  void advance_line(const IcebreakerPins& p, uint32_t n, const RxLine& rx, UartReceiver& line) override {
+  void advance_line(const IcebreakerPins& p, uint32_t n, const RxLine& rx, UartReceiver& line,
+                    const PinChange* ch, size_t count) override {
     before_stretch(n, line);
-    b_.advance_line(p, n, rx);
+    b_.advance_line(p, n, rx, ch, count);
   }
   bool sp_pwm() const override { return b_.sp_pwm(); }
   bool sp_en() const override { return b_.sp_en(); }

@@ -23,6 +23,7 @@ namespace mc::sim {
 
 class BoardModel {
  public:
+  using PinChange = mc::PinChange;
   virtual ~BoardModel() = default;
   // At least one and at most `limit` clocks with the pins p held: one
   // stepped clock, or a stretch in which nothing but counters and a frame
@@ -58,7 +59,15 @@ class BoardModel {
   virtual uint32_t idle_drive_runs(int /*axis*/, uint32_t /*from*/, uint32_t /*k*/, uint32_t /*max*/) const {
     return 0;
   }
-  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/) {}
+  // Encoder edges may come inside: the first `count` changes of ch (clocks
+  // from the stretch's first, each at 1 or later and before n), all of them
+  // allowed by idle_foldable(); p: the pins before them.
+  virtual void advance(const IcebreakerPins& /*p*/, uint32_t /*n*/, UartReceiver& /*line*/,
+                       const PinChange* /*ch*/, size_t /*count*/) {}
+  // Of these changes of the encoder pins inside such a stretch, how many
+  // in a row it may take (each an edge a decoder settles cleanly: only its
+  // count moves, which nothing reads before the stretch ends).
+  virtual size_t idle_foldable(const PinChange* /*ch*/, size_t /*count*/) const { return 0; }
   // TX after each of the next n clocks of such a stretch, before advance()
   // does them: f(level, clocks), as runs adding up to n.
   using Levels = std::function<void(bool, uint32_t)>;
@@ -72,7 +81,7 @@ class BoardModel {
     return 0;
   }
   virtual void advance_line(const IcebreakerPins& /*p*/, uint32_t /*n*/, const RxLine& /*rx*/,
-                            UartReceiver& /*line*/) {}
+                            UartReceiver& /*line*/, const PinChange* /*ch*/, size_t /*count*/) {}
   // Clocks stepped one by one so far (the rest were skipped).
   uint64_t stepped() const { return stepped_; }
   // Appends to *words every word the command executor writes into the

@@ -58,6 +58,7 @@ BoardEngine parse_board_engine(const std::string& name, const std::string& what)
 }
 
 struct VirtualBoard::Impl {
+  using EncoderEdge = VirtualBoard::EncoderEdge;
   // One axis slot of the board: its plant, when configured: a DC servo on
   // the H-bridge pins, or a stepper whose driver counts the STEP pulses.
   struct Slot {
@@ -238,9 +239,12 @@ struct VirtualBoard::Impl {
         if ((c & 1) == 0) {
           for (int a = 0; a < naxes; ++a) {
             const Slot& s = slot[a];
-            if (s.emit_n == 0) continue;  // its pins show s.shown already
-            const int64_t n = std::min<int64_t>(std::llabs(s.emit_n), int64_t(c / 2 + 1));
-            const QuadPins q = quadrature_pins(s.emit_from + (s.emit_n < 0 ? -n : n), s.cpr);
+            if (s.emit_n == 0) continue;              // its pins show s.shown already
+            const int64_t upto = int64_t(c / 2) + 1;  // edges shown by this clock
+            const int64_t n = std::min<int64_t>(std::llabs(s.emit_n), upto);
+            const int64_t to = s.emit_from + (s.emit_n < 0 ? -n : n);
+            if (edge_log && n == upto) edge_log->push_back({cycles + c, a, to});
+            const QuadPins q = quadrature_pins(to, s.cpr);
             pins.enc_a[a] = q.a;
             pins.enc_b[a] = q.b;
           }
@@ -276,12 +280,16 @@ struct VirtualBoard::Impl {
   // known ahead) go by with the board advanced over them at once. The
   // plants take every step with the drive the clock-by-clock path would
   // count (the PWM pins follow their counters): by runs of equal drive
-  // where no switch can change (hold_plants), else one by one. Positions
-  // and bytes are the same (VBoard.TwinAndRtlGiveIdenticalOutputs,
-  // VBoard.HeldPlantRunsGiveTheStepsTheRtlTakes). It stops
-  // after the step in which an encoder count changes or a switch is
-  // crossed, and never starts while one bounces: the switch pins change
-  // only in plant_step(). The spindle and coolant pins hold (SP_PWM aside,
+  // where no switch can change (hold_plants), else one by one. Positions,
+  // bytes and the clocks of the encoder edges are the same
+  // (VBoard.TwinAndRtlGiveIdenticalOutputs,
+  // VBoard.HeldPlantRunsGiveTheStepsTheRtlTakes). Where the plants are held
+  // by runs, the board takes the encoder edges they bring inside its
+  // stretch, at the clocks plant_step() would show them (hold_plants);
+  // otherwise the jump stops after the step in which an encoder count
+  // changes or a switch is crossed. It never starts while a switch bounces
+  // or an edge waits to be shown: the switch pins change only in
+  // plant_step(). The spindle and coolant pins hold (SP_PWM aside,
   // whose high clocks the board model counts). A handwheel edge ends the
   // stretch at the step boundary before it: plant_step() shows it at its
   // clock.
@@ -305,6 +313,8 @@ struct VirtualBoard::Impl {
     if (const uint64_t t = clocks_to_byte(most * k); t != kNever) most = std::min(most, (t + k - 1) / k);
     if (most == 0) return false;
     uint64_t j = 0;
+    edges_.clear();
+    shows_.clear();
     if (contacts_clear()) {
       j = hold_plants(most);
       held_steps += j;
@@ -323,10 +333,19 @@ struct VirtualBoard::Impl {
     }
     const bool sending = rx.busy();
     if (hosting) {
-      board->advance_line(pins, uint32_t(j * k), host_line, rx);
+      board->advance_line(pins, uint32_t(j * k), host_line, rx, edges_.data(), edges_.size());
       tx.clock_n(uint32_t(j * k));
     } else {
-      board->advance(pins, uint32_t(j * k), rx);
+      board->advance(pins, uint32_t(j * k), rx, edges_.data(), edges_.size());
+    }
+    // The pins as the edges inside left them.
+    for (const PinChange& e : edges_) {
+      pins.enc_a[e.axis] = e.a;
+      pins.enc_b[e.axis] = e.b;
+    }
+    for (const EncoderEdge& e : shows_) {
+      slot[e.axis].shown = e.count;
+      if (edge_log) edge_log->push_back({cycles + e.clock, e.axis, e.count});
     }
     cycles += j * k;
     if (hosting || sending || rx.busy() || rx.has_byte()) last_activity = cycles;
@@ -363,63 +382,105 @@ struct VirtualBoard::Impl {
     return at;
   }
 
-  // No switch can change while every table stays within its encoder
-  // count: each home switch more than two counts away, and the probe's gap
-  // wider than two counts of Z and all the face can rise or fall within
-  // two counts of X and Y. (Servo axes only: a stepper's table is not tied
-  // to a count.)
+  // No switch can change while every table stays within kFoldCounts of
+  // the encoder count it shows now: each home switch more than that and
+  // two counts away, the probe's gap wider than that many and two counts of
+  // Z, and all the face can rise or fall within them of X and Y. (Servo
+  // axes only: a stepper's table is not tied to a count.)
+  static constexpr int64_t kFoldCounts = 32;
   bool contacts_clear() const {
+    constexpr double reach = 2 + kFoldCounts;
     for (int a = 0; a < naxes; ++a) {
       if (!slot[a].plant) return false;
       if (has_home(a) &&
-          std::fabs(slot[a].table_m() - m.axes[size_t(a)].home->switch_m) <= 2 * m_per_count[a])
+          std::fabs(slot[a].table_m() - m.axes[size_t(a)].home->switch_m) <= reach * m_per_count[a])
         return false;
     }
     if (!has_probe) return true;
     look_at_face();
     if (std::isnan(face_band))
-      face_band = 2e3 * m_per_count[2] +
-                  face->variation_mm(face_x, face_y, 2e3 * m_per_count[0], 2e3 * m_per_count[1]);
+      face_band =
+          reach * 1e3 * m_per_count[2] +
+          face->variation_mm(face_x, face_y, reach * 1e3 * m_per_count[0], reach * 1e3 * m_per_count[1]);
     return std::fabs(slot[2].table_m() * 1e3 - face_z) > face_band;
   }
 
-  // The plants over up to `most` steps of a stretch, as jump()'s loop steps
-  // them (to the end of the step in which some encoder count changes), but
-  // by runs of steps with the same drive (AxisPlant::hold): a switching
-  // drive's pin is high through whole steps, then low through whole steps,
-  // with a step of each edge between. contacts_clear() must hold. Returns
-  // the steps taken.
+  // The plants over up to `most` steps of a stretch, by runs of steps with
+  // the same drive (AxisPlant::hold_counting): a switching drive's pin is
+  // high through whole steps, then low through whole steps, with a step of
+  // each edge between. Each count a plant reaches at the end of a step shows
+  // on its pins from the next step's clock 0, as plant_step() shows one; the
+  // board takes those edges inside its stretch where it can
+  // (BoardModel::idle_foldable). The steps end after one that brings an
+  // axis more than one count, or whose count the board cannot take there,
+  // or that takes a table past kFoldCounts from where it stood (then
+  // plant_step() shows it). contacts_clear() must hold. Returns the steps
+  // taken; edges_ has the edges inside them.
   uint64_t hold_plants(uint64_t most) {
     uint64_t end = most;
     uint64_t took[kBoardAxes] = {};
-    std::optional<AxisPlant> before[kBoardAxes];
+    int64_t count0[kBoardAxes] = {};
     for (int a = 0; a < naxes; ++a) {
-      if (a + 1 < naxes) before[a].emplace(*slot[a].plant);  // the last never goes past the end
-      took[a] = hold_axis(a, end);
-      if (slot[a].encoder_count() != slot[a].shown) end = took[a];
+      Slot& s = slot[a];
+      count0[a] = s.shown;
+      if (!ahead[a]) ahead[a] = std::make_unique<AxisPlant>(*s.plant);
+      ahead[a]->take_motion(*s.plant);  // to take the steps again, if fewer
+      counts[a].clear();
+      took[a] = hold_axis(a, end, counts[a]);
+      end = std::min(end, took[a]);
     }
-    // An axis that went past the step in which a later one's count changed
-    // takes its steps again, up to that one.
+    // The edges inside: each a count reached at the end of step c.step,
+    // shown from clock c.step * k.
+    shows_.clear();
+    for (int a = 0; a < naxes; ++a)
+      for (const AxisPlant::CountChange& c : counts[a]) {
+        if (c.step >= end) break;
+        if (std::llabs(c.count - count0[a]) > kFoldCounts) {
+          end = c.step;
+          break;
+        }
+        shows_.push_back({c.step * k, a, c.count});
+      }
+    std::stable_sort(shows_.begin(), shows_.end(),
+                     [](const EncoderEdge& x, const EncoderEdge& y) { return x.clock < y.clock; });
+    while (!shows_.empty() && shows_.back().clock >= end * k) shows_.pop_back();
+    edges_.clear();
+    for (const EncoderEdge& e : shows_) {
+      const QuadPins q = quadrature_pins(e.count, slot[e.axis].cpr);
+      edges_.push_back(PinChange{uint32_t(e.clock), e.axis, q.a, q.b, false});
+    }
+    if (const size_t f = board->idle_foldable(edges_.data(), edges_.size()); f < edges_.size()) {
+      end = edges_[f].clock / k;
+      edges_.resize(f);
+      shows_.resize(f);
+    }
+    // An axis that went past the end takes its steps again, up to it.
     for (int a = 0; a < naxes; ++a)
       if (took[a] > end) {
-        *slot[a].plant = *before[a];
-        hold_axis(a, end);
+        slot[a].plant->take_motion(*ahead[a]);
+        counts[a].clear();
+        if (hold_axis(a, end, counts[a]) != end)
+          throw std::logic_error("virtual board: a plant held again took other steps");
       }
     return end;
   }
-  // Axis a's plant over up to end steps, stopping after a count change:
-  // each step with the drive's mean over it, runs of whole steps through
-  // which the bridge holds one level (on or off: the PWM counter's phase
-  // and the duty tell how many) at once.
-  uint64_t hold_axis(int a, uint64_t end) {
+  // Axis a's plant over up to end steps, through its count changes (into
+  // changes, steps counted from 1): each step with the drive's mean over
+  // it, runs of whole steps through which the bridge holds one level (on or
+  // off: the PWM counter's phase and the duty tell how many) at once. Stops
+  // after a step that moves the count by more than one.
+  uint64_t hold_axis(int a, uint64_t end, std::vector<AxisPlant::CountChange>& changes) {
     Slot& s = slot[a];
     uint64_t j = 0;
+    AxisPlant::Samples none;
     while (j < end) {
       const int32_t d = board->idle_drive(a, uint32_t(j * k), k);
       const uint64_t r =
           std::max<uint32_t>(1, board->idle_drive_runs(a, uint32_t(j * k), k, uint32_t(end - j)));
-      j += s.plant->hold(s.supply_v * double(d) / double(k), r);
-      if (s.encoder_count() != s.shown) break;
+      const AxisPlant::Held h =
+          s.plant->hold_counting(s.supply_v * double(d) / double(k), r, none, changes, j);
+      j += h.steps;
+      if (h.big) break;
     }
     return j;
   }
@@ -439,6 +500,15 @@ struct VirtualBoard::Impl {
   const BoardModel::RxLine host_line = [this](uint64_t t) { return tx.pin_after(t); };
   uint64_t cycles = 0, last_activity = 0;
   uint64_t held_steps = 0;  // held_steps()
+  // hold_plants(): each plant as it was (to take the steps again), the
+  // counts each reached.
+  std::unique_ptr<AxisPlant> ahead[kBoardAxes];
+  std::vector<AxisPlant::CountChange> counts[kBoardAxes];
+  // hold_plants(): the edges the board takes inside the jump (clocks from
+  // its start), as pins and as the counts they show.
+  std::vector<PinChange> edges_;
+  std::vector<EncoderEdge> shows_;
+  std::vector<EncoderEdge>* edge_log = nullptr;  // log_encoder_edges()
   // The switches: each home switch on its axis's limit pin, the probe.
   Contact lim[kBoardAxes], probe;
   bool has_probe = false;
@@ -581,6 +651,9 @@ double VirtualBoard::handwheel_done_s() const {
 }
 void VirtualBoard::tap_segments(std::vector<uint32_t>* words) {
   impl_->board->tap_segments(words);
+}
+void VirtualBoard::log_encoder_edges(std::vector<EncoderEdge>* log) {
+  impl_->edge_log = log;
 }
 
 // ---------------------------------------------------------------------------

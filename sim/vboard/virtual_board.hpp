@@ -167,6 +167,17 @@ class VirtualBoard {
   // into its segment queue, in order, as it writes it (10 per segment,
   // hls/interp_seg.hpp); nullptr stops. Both engines.
   void tap_segments(std::vector<uint32_t>* words);
+  // For engine comparisons: appends to *log every encoder edge the board's
+  // pins show, the clock from which they show it and the count (the twin's
+  // jumps hand the board edges inside its stretches; the clocks are the
+  // same on both engines); nullptr stops.
+  struct EncoderEdge {
+    uint64_t clock;
+    int axis;
+    int64_t count;
+    bool operator==(const EncoderEdge&) const = default;
+  };
+  void log_encoder_edges(std::vector<EncoderEdge>* log);
 
  private:
   struct Impl;
