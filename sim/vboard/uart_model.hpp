@@ -97,13 +97,17 @@ class UartSender {
   bool level_ = true;
 };
 
-class UartReceiver {
+// A receiver's sampling of the line, without the bytes it took: cheap to
+// copy, so that a copy can look ahead for the next byte.
+class UartBits {
  public:
-  explicit UartReceiver(int clocks_per_bit) : cpb_(clocks_per_bit) {
+  explicit UartBits(int clocks_per_bit) : cpb_(clocks_per_bit) {
     if (cpb_ < 2) throw std::invalid_argument("UartReceiver: clocks_per_bit must be at least 2");
   }
-  // Sample the line in this clock.
-  void clock(bool level) {
+  // Sample the line in this clock; at a stop bit's sample, on_stop(byte,
+  // stop bit high).
+  template <typename F>
+  void clock(bool level, F&& on_stop) {
     if (bit_ < 0) {
       if (!level) {
         bit_ = 0;
@@ -122,16 +126,14 @@ class UartReceiver {
       sh_ = uint8_t((sh_ >> 1) | (level ? 0x80 : 0));
       ++bit_;
     } else {
-      if (level)
-        out_.push_back(sh_);
-      else
-        ++framing_errors_;
+      on_stop(sh_, level);
       bit_ = -1;
     }
   }
   // n clock(level) calls with the line held; between samples only the
   // counter moves.
-  void clock_n(bool level, uint32_t n) {
+  template <typename F>
+  void clock_n(bool level, uint32_t n, F&& on_stop) {
     while (n > 0) {
       if (bit_ < 0 && level) return;
       if (bit_ >= 0 && cnt_ > 1) {
@@ -140,15 +142,9 @@ class UartReceiver {
         n -= m;
         continue;
       }
-      clock(level);
+      clock(level, on_stop);
       --n;
     }
-  }
-  bool has_byte() const { return !out_.empty(); }
-  uint8_t take() {
-    const uint8_t b = out_.front();
-    out_.pop_front();
-    return b;
   }
   bool busy() const { return bit_ >= 0; }
   // Inside a byte: the clock() calls up to the one that takes it (its stop
@@ -156,12 +152,44 @@ class UartReceiver {
   uint64_t clocks_to_byte() const {
     return busy() ? uint64_t(cnt_) + uint64_t(9 - bit_) * uint64_t(cpb_) : 0;
   }
-  uint64_t framing_errors() const { return framing_errors_; }
 
  private:
   int cpb_;
   int bit_ = -1, cnt_ = 0;
   uint8_t sh_ = 0;
+};
+
+class UartReceiver {
+ public:
+  explicit UartReceiver(int clocks_per_bit) : bits_(clocks_per_bit) {}
+  // Sample the line in this clock.
+  void clock(bool level) {
+    bits_.clock(level, [this](uint8_t byte, bool stop) { take(byte, stop); });
+  }
+  // n clock(level) calls with the line held.
+  void clock_n(bool level, uint32_t n) {
+    bits_.clock_n(level, n, [this](uint8_t byte, bool stop) { take(byte, stop); });
+  }
+  bool has_byte() const { return !out_.empty(); }
+  uint8_t take() {
+    const uint8_t b = out_.front();
+    out_.pop_front();
+    return b;
+  }
+  bool busy() const { return bits_.busy(); }
+  uint64_t clocks_to_byte() const { return bits_.clocks_to_byte(); }
+  uint64_t framing_errors() const { return framing_errors_; }
+  // The sampling alone, to look ahead on a copy.
+  const UartBits& bits() const { return bits_; }
+
+ private:
+  void take(uint8_t byte, bool stop) {
+    if (stop)
+      out_.push_back(byte);
+    else
+      ++framing_errors_;
+  }
+  UartBits bits_;
   std::deque<uint8_t> out_;
   uint64_t framing_errors_ = 0;
 };

@@ -357,7 +357,8 @@ struct VirtualBoard::Impl {
   // receiver takes the first byte (or finds a framing error; counted from
   // 1), from a copy of it fed the stretch's TX; kNever: none.
   uint64_t clocks_to_byte(uint64_t n) const {
-    UartReceiver copy = rx;
+    UartBits copy = rx.bits();
+    const auto none = [](uint8_t, bool) {};  // stops come at `at`, before the runs taken
     uint64_t t = 0, at = kNever;
     board->idle_tx(uint32_t(n), [&](bool level, uint32_t run) {
       while (run > 0 && at == kNever) {
@@ -366,7 +367,7 @@ struct VirtualBoard::Impl {
             at = t + b;
             return;
           }
-          copy.clock_n(level, run);
+          copy.clock_n(level, run, none);
           t += run;
           return;
         }
@@ -374,7 +375,7 @@ struct VirtualBoard::Impl {
           t += run;
           return;
         }
-        copy.clock(level);  // a start bit
+        copy.clock(level, none);  // a start bit
         ++t;
         --run;
       }
