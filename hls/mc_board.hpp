@@ -134,7 +134,7 @@ class McBoard {
     // The PID's tick or done in this clock ends every stretch (the board's
     // skips do not go through them: quiet_limit_as below): found here, the
     // two clocks of a sample that are always clocked skip the checks.
-    if (n == 0 || in.rst || u_core.pid().quiet_limit() == 0) return 0;
+    if (n == 0 || in.rst || u_core.pid().tick() || u_core.pid().done()) return 0;
     // A frame on its way out (link_tx busy) goes on inside the stretch
     // (sending_, below); otherwise uart_tx is idle, and a byte handed to it
     // ends the stretch.
@@ -158,10 +158,13 @@ class McBoard {
     // reaches nothing but the PID's next tick: no step generator armed.
     const bool busy = u_core.interp().state() == Core::Interp::ST_RUN && u_step.following(w.step);
     // The sweep's drive updates may come inside unless the register file
-    // reads a drive command back (its read pipeline follows it).
-    let_ = typename Core::Let{walking, busy, true, !u_regs.reads_drive()};
-    // No tick or done in the n clocks (nor a drive update, unless let_.drive;
-    // nor, unless busy, an iteration).
+    // reads a drive command back (its read pipeline follows it). Unless a
+    // walk moves the sample port, the stretch may end with the edge that
+    // raises the tick or done (which reach the other blocks a clock later;
+    // the port reads the same word through it).
+    let_ = typename Core::Let{walking, busy, true, !u_regs.reads_drive(), !walking};
+    // No tick or done in the n clocks, the last at most raising one (nor a
+    // drive update, unless let_.drive; nor, unless busy, an iteration).
     const uint32_t t = u_core.quiet_limit_as(let_);
     if (t < n) n = t;
     if (n == 0 || !u_core.quiet_as(core_in_, n, let_)) return 0;
