@@ -207,8 +207,9 @@ class McBoard {
   // The register file at the walk's end is kept for skip() (walked_).
   // quiet() found quiet_but_walk(in) before, and a walk keeps it: of what
   // that reads, the walker's part of a clock sets only ferr_o, tx_start_o
-  // and tlm_pend, each of which ends the walk here. So each clock of it is
-  // a walk_clock(), and it is over once the walker has settled.
+  // and tlm_pend, each of which ends the walk here; quiet() refused a walk
+  // with telemetry due (walk_silent). So each clock of it is a
+  // walk_clock(), and it is over once the walker has settled.
   uint32_t walk_clocks(const typename Regs::In& in) {
     Regs& regs = walked_;
     regs = u_regs;

@@ -465,16 +465,56 @@ class McRegs {
     return true;
   }
 
-  // clock() of a walk with nothing else under way (quiet_but_walk(in)):
-  // only the read path and the walker's part move, the rest holds as
-  // clock() would leave it, for a fraction of the work (McBoard::walk_clocks
-  // clocks a whole walk on a copy each sample). Returns what clock() would.
+  // clock() of a walk with nothing else under way (quiet_but_walk(in)) and
+  // no telemetry to send (walk_silent()): of the clock only the read path
+  // and the walker's part move (the delay line from done, the walker and
+  // its pipelines, the following-error check); the executor, the TLM
+  // register, the sample count and the sender hold as clock() would leave
+  // them, for want of a frame, a write, done, a telemetry word or a reply.
+  // A fraction of clock()'s work: McBoard::walk_clocks clocks a whole walk
+  // on a copy each sample. Returns what clock() would.
   bool walk_clock(const In& in) {
     if (walk_settled(in)) return false;  // quiet(in): clock() changes nothing
-    const Pre p = pre(in);
-    const R o = r;
-    read_path(o, live(o.ra, in));
-    clock_tail(o, in, p);
+    R& n = r;
+    const bool w_start = r.done_d >> 1 & 1, w_last = walk_last(), w_act = r.w_act, w_hdr = r.w_hdr;
+    const bool t_v = r.t2 >> 5 & 1, t_last = r.t2 >> 4 & 1, t_check = t_v && t_follow_();
+    const uint8_t w_a = r.w_a, w_k = r.w_k, t1 = r.t1, ta1 = r.ta1, ta2 = r.ta2;
+    const uint32_t q_v = qv(in), sq = r.sq;
+    const uint16_t ra = r.ra;
+    n.sq = shadow[r.sa];
+    n.q = live(ra, in);
+    n.q_smp = ra_smp(ra);
+    n.done_d = uint8_t(r.done_d << 1 & 3);
+    if (w_start) {
+      n.w_act = true;
+      n.w_hdr = true;
+      n.w_a = 0;
+      n.w_k = 0;
+      n.w_tlm = false;  // none due (walk_silent)
+      n.w_ptr = 1;
+      n.w_tlm_busy = false;
+    } else if (w_act) {
+      n.w_hdr = false;
+      if (w_last) n.w_act = false;
+      if (!w_hdr) {
+        n.w_k = w_k == 4 ? 0 : uint8_t(w_k + 1);
+        if (w_k == 4) n.w_a = uint8_t((w_a + 1) & 3);
+      }
+    }
+    if (w_act) {
+      n.ra = w_hdr ? board::reg::TLM_HDR : uint16_t(board::reg::AXIS_BASE | w_a << 4 | w_off(w_k));
+      n.sa = uint8_t(0x80 | w_a << 4 | board::reg::AX_FERR);
+    } else {
+      n.ra = r.addr;
+      n.sa = sidx(r.addr);
+    }
+    n.t1 = uint8_t(uint32_t(w_act) << 5 | uint32_t(w_last) << 4 | uint32_t(w_hdr) << 3 | w_k);
+    n.t2 = t1;
+    n.ta1 = w_a;
+    n.ta2 = ta1;
+    if (r.w_end) n.w_tlm_busy = false;
+    n.w_end = t_v && t_last;
+    n.ferr_o = t_check ? uint8_t(uint32_t(ferr_trip(q_v, sq)) << ta2 & AXES) : 0;
     return true;
   }
 
