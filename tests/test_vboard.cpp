@@ -187,6 +187,22 @@ TEST(VBoard, EdgesInsideJumpsStopShortOfASwitch) {
   expect_same(twin, rtl);
 }
 
+// A host that opens the port at once is answered at once: its first frame
+// is not lost to the board's power-on reset (which would cost its first
+// timeout, 200 ms of board time, on both engines).
+TEST(VBoard, AHostConnectsWithoutRetrying) {
+  for (const sim::BoardEngine e : {sim::BoardEngine::Twin, sim::BoardEngine::Rtl}) {
+    sim::VirtualBoard board(machine::default_machine(), 0, e);
+    sim::BoardStream s(board);
+    host::BoardLink link(s);
+    link.connect();
+    std::printf("%s: connected after %llu clocks\n", sim::board_engine_name(e),
+                static_cast<unsigned long long>(board.cycles()));
+    EXPECT_EQ(link.counters().retransmits, 0u) << sim::board_engine_name(e);
+    EXPECT_LT(board.cycles(), 12'000u) << sim::board_engine_name(e) << ": over a millisecond";
+  }
+}
+
 // Plant steps of 4 clocks, shorter than the half bit by which the board's
 // stretch may outlast the byte its receiver takes: each TX byte still comes
 // out in the step the RTL's does.

@@ -540,6 +540,14 @@ VirtualBoard::VirtualBoard(const MachineConfig& m, uint32_t seed, BoardEngine e)
 VirtualBoard::~VirtualBoard() = default;
 
 void VirtualBoard::send(const uint8_t* p, size_t n) {
+  // A host opens the port of a board that is up: its first byte reaches RX
+  // after the power-on reset. (At clock 0 the reset would swallow the start
+  // of the first frame, and the host would wait out its first timeout,
+  // 200 ms of board time, before trying again.)
+  if (impl_->cycles < kPowerOnClocks) {
+    std::vector<uint8_t> none;  // the board sends nothing in its reset
+    run(kPowerOnClocks - impl_->cycles, none, false);
+  }
   for (size_t i = 0; i < n; ++i) impl_->tx.send(p[i]);
 }
 size_t VirtualBoard::rx_backlog() const {

@@ -51,6 +51,9 @@ constexpr int kBoardAxes = 3;
 // The longest watchdog period the board can hold (WDOG is 24 bits): after
 // this long without a frame the drives are off for sure.
 constexpr uint64_t kMaxWatchdogClocks = uint64_t(1) << 24;
+// The board's power-on reset (rtl/motioncore_icebreaker.v's por: 15 clocks)
+// and a clock for the synchronizer: a host's first byte comes after it.
+constexpr uint64_t kPowerOnClocks = 16;
 // The handwheel: quadrature counts a detent (a 100-PPR wheel has 100 detents
 // and 400 counts a turn), and the fewest clocks between two of its edges:
 // above the decoder's longest filter (HW_CFG, 15 clocks) and its
