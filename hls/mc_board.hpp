@@ -300,19 +300,7 @@ class McBoard {
       if (n > 1) u_core.skip_as(core_in_, n - 1, let_, ch, count);
       uint8_t cmd = 0;
       for (int a = 0; a < NAXES; ++a) cmd = uint8_t(cmd | (uint32_t(u_core.interp().pos(a)) & 3) << (2 * a));
-      // The last clock on the pins the edges before it left.
-      if (count == 0) {
-        u_core.skip_as(core_in_, 1, let_);
-      } else {
-        typename Core::In at = core_in_;
-        size_t k = 0;
-        for (; k < count && ch[k].clock < n - 1; ++k) {
-          at.enc_a[ch[k].axis] = ch[k].a;
-          at.enc_b[ch[k].axis] = ch[k].b;
-          at.enc_z[ch[k].axis] = ch[k].z;
-        }
-        u_core.skip_as(at, 1, let_, ch + k, count - k, n - 1);
-      }
+      u_core.skip_as(core_in_, 1, let_, ch, count, n - 1);  // on the pins the edges before it left
       u_step.follow(cmd);
     } else {
       u_core.skip_as(core_in_, n, let_, ch, count);

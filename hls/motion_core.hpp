@@ -310,8 +310,8 @@ class MotionCore {
   // n clocks after quiet_as(in, n, let); with let.busy, n must not reach
   // the clock that ends the running segment (InterpCore::run_to_end on a
   // copy tells how far that is).
-  // The pins may change as the first `count` of ch say (foldable(), their
-  // clocks counted from `from`, the stretch's first clock).
+  // The pins may change as the first `count` of ch say (foldable(); these
+  // n clocks are the stretch's from-th on, as skip_others() counts).
   void skip_as(const In& in, uint32_t n, Let let, const PinChange* ch = nullptr, size_t count = 0,
                uint32_t from = 0) {
     if (let.busy && ip_.state() == InterpCore<FIFO_AW>::ST_RUN)
@@ -601,8 +601,9 @@ class MotionCore {
     return t + 1 + skip_stretch(at, n - t - 1, let, after, ch + k, count - k, t + 1);
   }
   // in: the inputs held (needed with let.settle or let.drive), but for the
-  // pins that ch changes (let.settle), whose clocks count from `from` (the
-  // stretch's first clock).
+  // pins that ch changes (let.settle): ch's clocks count from the
+  // stretch's first, these n clocks its from-th on, the changes before them
+  // giving the pins they start with.
   void skip_others(uint32_t n, const In* in, Let let, const PinChange* ch = nullptr, size_t count = 0,
                    uint32_t from = 0) {
     if (let.drive) skip_drive(n, *in);
@@ -617,10 +618,12 @@ class MotionCore {
       if (let.settle) {
         QuadIn qi = quad_in(*in, a, false);
         uint32_t t = 0;
-        for (size_t i = 0; i < count && ch[i].clock - from < n; ++i) {
+        for (size_t i = 0; i < count && ch[i].clock < from + n; ++i) {
           if (ch[i].axis != a) continue;
-          dec_[a].skip_settling(qi, ch[i].clock - from - t);
-          t = ch[i].clock - from;
+          if (ch[i].clock > from) {
+            dec_[a].skip_settling(qi, ch[i].clock - from - t);
+            t = ch[i].clock - from;
+          }
           qi.a = ch[i].a;
           qi.b = ch[i].b;
           qi.z = ch[i].z;
