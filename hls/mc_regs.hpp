@@ -476,43 +476,22 @@ class McRegs {
   bool walk_clock(const In& in) {
     if (walk_settled(in)) return false;  // quiet(in): clock() changes nothing
     R& n = r;
-    const bool w_start = r.done_d >> 1 & 1, w_last = walk_last(), w_act = r.w_act, w_hdr = r.w_hdr;
+    const bool w_start = r.done_d >> 1 & 1, w_end = r.w_end;
     const bool t_v = r.t2 >> 5 & 1, t_last = r.t2 >> 4 & 1, t_check = t_v && t_follow_();
-    const uint8_t w_a = r.w_a, w_k = r.w_k, t1 = r.t1, ta1 = r.ta1, ta2 = r.ta2;
+    const uint8_t ta2 = r.ta2;
     const uint32_t q_v = qv(in), sq = r.sq;
     const uint16_t ra = r.ra;
+    const Walker w{r.w_act, r.w_hdr, walk_last(), r.w_a, r.w_k, r.t1, r.ta1};
     n.sq = shadow[r.sa];
     n.q = live(ra, in);
     n.q_smp = ra_smp(ra);
     n.done_d = uint8_t(r.done_d << 1 & 3);
+    walk(w, false, w_start, false, r.addr, sidx(r.addr));  // no telemetry due (walk_silent)
     if (w_start) {
-      n.w_act = true;
-      n.w_hdr = true;
-      n.w_a = 0;
-      n.w_k = 0;
-      n.w_tlm = false;  // none due (walk_silent)
       n.w_ptr = 1;
       n.w_tlm_busy = false;
-    } else if (w_act) {
-      n.w_hdr = false;
-      if (w_last) n.w_act = false;
-      if (!w_hdr) {
-        n.w_k = w_k == 4 ? 0 : uint8_t(w_k + 1);
-        if (w_k == 4) n.w_a = uint8_t((w_a + 1) & 3);
-      }
     }
-    if (w_act) {
-      n.ra = w_hdr ? board::reg::TLM_HDR : uint16_t(board::reg::AXIS_BASE | w_a << 4 | w_off(w_k));
-      n.sa = uint8_t(0x80 | w_a << 4 | board::reg::AX_FERR);
-    } else {
-      n.ra = r.addr;
-      n.sa = sidx(r.addr);
-    }
-    n.t1 = uint8_t(uint32_t(w_act) << 5 | uint32_t(w_last) << 4 | uint32_t(w_hdr) << 3 | w_k);
-    n.t2 = t1;
-    n.ta1 = w_a;
-    n.ta2 = ta1;
-    if (r.w_end) n.w_tlm_busy = false;
+    if (w_end) n.w_tlm_busy = false;
     n.w_end = t_v && t_last;
     n.ferr_o = t_check ? uint8_t(uint32_t(ferr_trip(q_v, sq)) << ta2 & AXES) : 0;
     return true;
@@ -609,6 +588,53 @@ class McRegs {
     p.cu_go = cu_free && r.cnt_pend != 0;
     return p;
   }
+  // The walker's registers a clock reads (before its edge; last: walk_last()).
+  struct Walker {
+    bool act, hdr, last;
+    uint8_t a, k, t1, ta1;
+  };
+  // The walker's part of a clock, from its registers o: a walk starts
+  // (tlm: it writes telemetry) or steps to its next word; the read address
+  // follows it, else the register address (the shadow RAM then at
+  // idle_sa); the word's valid, last, header and index, and its axis,
+  // follow two clocks behind. Inlined: walk_clock() runs it some twenty
+  // times a sample, and a call there cost as much as the sharing saves.
+  [[gnu::always_inline]] void walk(const Walker& o, bool rst, bool start, bool tlm, uint16_t addr,
+                                   uint8_t idle_sa) {
+    namespace br = board::reg;
+    R& n = r;
+    if (rst) {
+      n.w_act = false;
+    } else if (start) {
+      n.w_act = true;
+      n.w_hdr = true;
+      n.w_a = 0;
+      n.w_k = 0;
+      n.w_tlm = tlm;
+    } else if (o.act) {
+      n.w_hdr = false;
+      if (o.last) n.w_act = false;
+      if (!o.hdr) {
+        n.w_k = o.k == 4 ? 0 : uint8_t(o.k + 1);
+        if (o.k == 4) n.w_a = uint8_t((o.a + 1) & 3);
+      }
+    }
+    if (o.act) {
+      n.ra = o.hdr ? br::TLM_HDR : uint16_t(br::AXIS_BASE | o.a << 4 | w_off(o.k));
+      n.sa = uint8_t(0x80 | o.a << 4 | br::AX_FERR);  // sidx(AXIS_BASE | w_a << 4 | AX_FERR)
+    } else {
+      n.ra = addr;
+      n.sa = idle_sa;
+    }
+    if (rst) {
+      n.t1 = n.t2 = 0;
+    } else {
+      n.t1 = uint8_t(uint32_t(o.act) << 5 | uint32_t(o.last) << 4 | uint32_t(o.hdr) << 3 | o.k);
+      n.t2 = o.t1;
+    }
+    n.ta1 = o.a;
+    n.ta2 = o.ta1;
+  }
   // The read path: the shadow word (before this clock's write), the live
   // value of o.ra (live_q, read before the first write).
   void read_path(const R& o, uint32_t live_q) {
@@ -655,37 +681,8 @@ class McRegs {
     }
 
     // The walker.
-    if (in.rst) {
-      n.w_act = false;
-    } else if (w_start) {
-      n.w_act = true;
-      n.w_hdr = true;
-      n.w_a = 0;
-      n.w_k = 0;
-      n.w_tlm = o.tlm_due_l && tlm_free;
-    } else if (o.w_act) {
-      n.w_hdr = false;
-      if (w_last) n.w_act = false;
-      if (!o.w_hdr) {
-        n.w_k = o.w_k == 4 ? 0 : uint8_t(o.w_k + 1);
-        if (o.w_k == 4) n.w_a = uint8_t((o.w_a + 1) & 3);
-      }
-    }
-    if (o.w_act) {
-      n.ra = o.w_hdr ? br::TLM_HDR : uint16_t(br::AXIS_BASE | o.w_a << 4 | w_off(o.w_k));
-      n.sa = uint8_t(0x80 | o.w_a << 4 | br::AX_FERR);  // sidx(AXIS_BASE | w_a << 4 | AX_FERR)
-    } else {
-      n.ra = addr;
-      n.sa = cu_go ? cu_word(cu_pick >> 1) : sidx(addr);
-    }
-    if (in.rst) {
-      n.t1 = n.t2 = 0;
-    } else {
-      n.t1 = uint8_t(uint32_t(o.w_act) << 5 | uint32_t(w_last) << 4 | uint32_t(o.w_hdr) << 3 | o.w_k);
-      n.t2 = o.t1;
-    }
-    n.ta1 = o.w_a;
-    n.ta2 = o.ta1;
+    walk(Walker{o.w_act, o.w_hdr, w_last, o.w_a, o.w_k, o.t1, o.ta1}, in.rst, w_start,
+         o.tlm_due_l && tlm_free, addr, cu_go ? cu_word(cu_pick >> 1) : sidx(addr));
 
     // Telemetry words and the following-error check, as the values arrive.
     n.ferr_o = 0;
