@@ -598,7 +598,7 @@ class McRegs {
   // follows it, else the register address (the shadow RAM then at
   // idle_sa); the word's valid, last, header and index, and its axis,
   // follow two clocks behind. Inlined: walk_clock() runs it some twenty
-  // times a sample, and a call there cost as much as the sharing saves.
+  // times a sample, where a call showed in the board's instruction count.
   [[gnu::always_inline]] void walk(const Walker& o, bool rst, bool start, bool tlm, uint16_t addr,
                                    uint8_t idle_sa) {
     namespace br = board::reg;

@@ -411,6 +411,9 @@ class Host {
 };
 
 // Encoders, switches, button and handwheel.
+// The encoder pins that show a count (count mod 4; A leads B counting up).
+constexpr bool kQuadA[4] = {false, true, true, false}, kQuadB[4] = {false, false, true, true};
+
 class PinGen {
  public:
   PinGen(uint64_t seed, const Profile& p) : rng_(seed), p_(p) {}
@@ -428,9 +431,8 @@ class PinGen {
         x.t = 0;
         x.count += x.bad && rng_() % 10 == 0 ? 2 * x.dir : x.dir;  // two edges at once: an error
       }
-      static constexpr bool kA[4] = {false, true, true, false}, kB[4] = {false, false, true, true};
-      p.enc_a[a] = kA[x.count & 3];
-      p.enc_b[a] = kB[x.count & 3];
+      p.enc_a[a] = kQuadA[x.count & 3];
+      p.enc_b[a] = kQuadB[x.count & 3];
       if (x.bad && rng_() % 3000 == 0) p.enc_a[a] = !p.enc_a[a];  // a one-clock glitch
     }
     // The probe: touches now and then, with bounce.
@@ -1150,7 +1152,6 @@ TEST(BoardTwin, AdvanceEqualsSteps) {
 // stretches that take drive updates and move the command; now and then an
 // edge skips a count (an error, which no stretch may take).
 TEST(BoardTwin, AdvanceTakesEncoderEdges) {
-  static constexpr bool kA[4] = {false, true, true, false}, kB[4] = {false, false, true, true};
   // Servoing, with pauses between frames and most frames queueing segments.
   static constexpr Profile kMoving{"moving", 80, 0,      5,         3,         12, 2, 1,  1, 1,
                                    1,        1,  20'000, 1'000'000, 3'000'000, 10, 2, 70, 60};
@@ -1167,8 +1168,8 @@ TEST(BoardTwin, AdvanceTakesEncoderEdges) {
     int dir[3] = {1, 1, 1};
     const auto show = [&](int a, int64_t c) {
       count[a] = c;
-      p.enc_a[a] = kA[c & 3];
-      p.enc_b[a] = kB[c & 3];
+      p.enc_a[a] = kQuadA[c & 3];
+      p.enc_b[a] = kQuadB[c & 3];
     };
     uint64_t clocks = 0;
     while (clocks < 1'500'000) {
@@ -1202,7 +1203,7 @@ TEST(BoardTwin, AdvanceTakesEncoderEdges) {
           for (int a = 0; a < 3; ++a)
             if (period[a] != 0 && (clocks + t + phase[a]) % period[a] == 0) {
               c[a] += rng() % 500 == 0 ? 2 * dir[a] : dir[a];
-              ch.push_back(mc::PinChange{t, a, kA[c[a] & 3], kB[c[a] & 3], false});
+              ch.push_back(mc::PinChange{t, a, kQuadA[c[a] & 3], kQuadB[c[a] & 3], false});
               to.push_back(c[a]);
             }
         const size_t f = fast.foldable(ch.data(), ch.size());

@@ -313,12 +313,12 @@ struct VirtualBoard::Impl {
     if (const uint64_t t = clocks_to_byte(most * k); t != kNever) most = std::min(most, (t + k - 1) / k);
     if (most == 0) return false;
     uint64_t j = 0;
-    edges_.clear();
-    shows_.clear();
     if (contacts_clear()) {
       j = hold_plants(most);
       held_steps += j;
     } else {
+      edges_.clear();  // the jump ends at the first edge
+      shows_.clear();
       bool edge = false;
       const bool enabled = board->drv_en();
       while (j < most && !edge) {
