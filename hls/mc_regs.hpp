@@ -493,7 +493,7 @@ class McRegs {
     }
     if (w_end) n.w_tlm_busy = false;
     n.w_end = t_v && t_last;
-    n.ferr_o = t_check ? uint8_t(uint32_t(ferr_trip(q_v, sq)) << ta2 & AXES) : 0;
+    n.ferr_o = t_check ? uint8_t(uint32_t(ferr_trip(q_v, sq)) << ta2 & AXES) : uint8_t(0);
     return true;
   }
 
